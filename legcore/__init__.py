@@ -1,0 +1,1 @@
+"""LegOpt core: kinematics, dynamics, trajectories, problems and optimisers (pure library)."""

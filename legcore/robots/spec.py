@@ -1,0 +1,227 @@
+"""Robot model specifications (JSON/YAML-able) and their physical validation.
+
+A specification is plain data: it is what a user submits and what the store keeps. `build_robot`
+(in :mod:`legcore.robots.build`) turns a valid specification into a Pinocchio model.
+
+Units: lengths in m, angles in rad, masses in kg, inertias in kg·m², velocities in rad/s (m/s for
+prismatic joints), motor constants in SI (N·m/A, V·s/rad, Ω, N·m·s/rad, N·m).
+
+Every rule rejects bad input with a message that names the field and the reason, e.g.
+``joints.1.inertia: not positive semi-definite (smallest eigenvalue -2.0e-03 kg·m²)``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+__all__ = [
+    "FiniteFloat",
+    "MotorSpec",
+    "DHJoint",
+    "DHRobotSpec",
+    "URDFRobotSpec",
+    "RobotSpec",
+    "validate_inertia",
+]
+
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
+Row3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
+Row4 = Annotated[list[FiniteFloat], Field(min_length=4, max_length=4)]
+Matrix3 = Annotated[list[Row3], Field(min_length=3, max_length=3)]
+Matrix4 = Annotated[list[Row4], Field(min_length=4, max_length=4)]
+
+_INERTIA_TOL = 1e-12  # kg·m², absolute slack for symmetry / PSD / triangle checks
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def validate_inertia(inertia: np.ndarray) -> None:
+    """Check a 3×3 rotational inertia about the COM (kg·m²) for physical consistency.
+
+    Raises ``ValueError`` if it is not symmetric, not positive semi-definite, or its principal
+    moments violate the triangle inequality ``I_a + I_b >= I_c``.
+    """
+    inertia = np.asarray(inertia, dtype=float)
+    if inertia.shape != (3, 3):
+        raise ValueError(f"must be a 3x3 matrix, got shape {inertia.shape}")
+    scale = max(1.0, float(np.abs(inertia).max()))
+    asym = float(np.abs(inertia - inertia.T).max())
+    if asym > _INERTIA_TOL * scale:
+        raise ValueError(f"not symmetric (max |I - I^T| = {asym:.3e} kg·m²)")
+    eig = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
+    if eig[0] < -_INERTIA_TOL * scale:
+        raise ValueError(f"not positive semi-definite (smallest eigenvalue {eig[0]:.3e} kg·m²)")
+    a, b, c = eig  # ascending
+    if a + b < c - _INERTIA_TOL * scale:
+        raise ValueError(
+            f"principal moments ({a:.3e}, {b:.3e}, {c:.3e}) kg·m² violate the triangle "
+            "inequality I_a + I_b >= I_c"
+        )
+
+
+class MotorSpec(_Strict):
+    """Actuator behind one joint (seed 001 eqs 9–14; friction as in the PUMA 560 reference).
+
+    ``G`` is the gear ratio (motor turns per joint turn, may be negative), ``Jm`` the rotor inertia
+    on the motor side (kg·m²; reflected to the joint as ``Jm·G²`` = Pinocchio armature), ``Kt``
+    torque constant (N·m/A), ``Ke`` back-EMF constant (V·s/rad), ``R`` armature resistance (Ω),
+    ``B`` viscous friction (N·m·s/rad, motor side), ``Tc_pos``/``Tc_neg`` Coulomb friction
+    (N·m, motor side) for positive / negative motor velocity.
+    """
+
+    G: FiniteFloat = 1.0
+    Jm: FiniteFloat = 0.0
+    Kt: FiniteFloat | None = None
+    Ke: FiniteFloat | None = None
+    R: FiniteFloat | None = None
+    B: FiniteFloat = 0.0
+    Tc_pos: FiniteFloat = 0.0
+    Tc_neg: FiniteFloat = 0.0
+
+    @field_validator("G")
+    @classmethod
+    def _nonzero_ratio(cls, v: float) -> float:
+        if v == 0.0:
+            raise ValueError("gear ratio must be non-zero")
+        return v
+
+    @field_validator("Jm", "B")
+    @classmethod
+    def _nonnegative(cls, v: float) -> float:
+        if v < 0.0:
+            raise ValueError("must be >= 0")
+        return v
+
+    @field_validator("Kt", "Ke", "R")
+    @classmethod
+    def _positive(cls, v: float | None) -> float | None:
+        if v is not None and v <= 0.0:
+            raise ValueError("must be > 0")
+        return v
+
+    @property
+    def electrical(self) -> bool:
+        """True when Kt, Ke and R are all known (electrical energy can be computed)."""
+        return self.Kt is not None and self.Ke is not None and self.R is not None
+
+
+class DHJoint(_Strict):
+    """One joint + the link it moves, in Denavit–Hartenberg parameters.
+
+    Standard DH (distal): ``A_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i)``, ``θ_i = q_i + offset`` for a
+    revolute joint, ``d_i = d + q_i`` for a prismatic one. Modified DH (Craig):
+    ``A_i = Rx(α_{i-1}) Tx(a_{i-1}) Rz(θ_i) Tz(d_i)`` where ``a``/``alpha`` of this entry are the
+    ones *before* the joint. ``com`` (m) and ``inertia`` (kg·m², about the COM, axes parallel to the
+    frame) are expressed in the link frame: DH frame i (after the transform) for standard DH, the
+    joint frame for modified DH.
+    """
+
+    type: Literal["revolute", "prismatic"] = "revolute"
+    name: str | None = Field(default=None, max_length=64)
+    d: FiniteFloat = 0.0
+    a: FiniteFloat = 0.0
+    alpha: FiniteFloat = 0.0
+    offset: FiniteFloat = 0.0
+    q_min: FiniteFloat = -math.pi
+    q_max: FiniteFloat = math.pi
+    qd_max: FiniteFloat = 10.0
+    tau_max: FiniteFloat | None = None
+    mass: FiniteFloat = 0.0
+    com: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+    inertia: Matrix3 = Field(default_factory=lambda: [[0.0] * 3 for _ in range(3)])
+    motor: MotorSpec | None = None
+
+    @field_validator("mass")
+    @classmethod
+    def _mass_nonnegative(cls, v: float) -> float:
+        if v < 0.0:
+            raise ValueError(f"mass must be >= 0 kg, got {v}")
+        return v
+
+    @field_validator("qd_max")
+    @classmethod
+    def _speed_positive(cls, v: float) -> float:
+        if v <= 0.0:
+            raise ValueError(f"must be > 0, got {v}")
+        return v
+
+    @field_validator("tau_max")
+    @classmethod
+    def _torque_positive(cls, v: float | None) -> float | None:
+        if v is not None and v <= 0.0:
+            raise ValueError(f"must be > 0, got {v}")
+        return v
+
+    @field_validator("inertia")
+    @classmethod
+    def _inertia_physical(cls, v: list[list[float]]) -> list[list[float]]:
+        validate_inertia(np.asarray(v, dtype=float))
+        return v
+
+    @model_validator(mode="after")
+    def _limits_ordered(self) -> DHJoint:
+        if not self.q_min < self.q_max:
+            raise ValueError(f"q_min ({self.q_min}) must be < q_max ({self.q_max})")
+        return self
+
+
+def _check_homogeneous(T: list[list[float]] | None, field: str) -> None:
+    if T is None:
+        return
+    M = np.asarray(T, dtype=float)
+    R = M[:3, :3]
+    if not np.allclose(M[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+        raise ValueError(f"{field}: last row must be [0, 0, 0, 1]")
+    if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0.0:
+        raise ValueError(f"{field}: upper-left 3x3 block must be a rotation matrix")
+
+
+class DHRobotSpec(_Strict):
+    """A serial chain given by a DH table (1–12 joints)."""
+
+    kind: Literal["dh"] = "dh"
+    name: str = Field(min_length=1, max_length=64)
+    convention: Literal["standard", "modified"] = "standard"
+    joints: list[DHJoint] = Field(min_length=1, max_length=12)
+    base: Matrix4 | None = None
+    tool: Matrix4 | None = None
+    gravity: Vec3 = Field(default_factory=lambda: [0.0, 0.0, -9.81])
+    home: list[FiniteFloat] | None = None
+    ik: Literal["puma560", "leg3", "leg2", "arm5_down", "dls"] | None = None
+    description: str = Field(default="", max_length=4000)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> DHRobotSpec:
+        _check_homogeneous(self.base, "base")
+        _check_homogeneous(self.tool, "tool")
+        if self.home is not None:
+            if len(self.home) != len(self.joints):
+                raise ValueError(
+                    f"home: has {len(self.home)} values but the robot has {len(self.joints)} joints"
+                )
+            for i, (qh, j) in enumerate(zip(self.home, self.joints, strict=True)):
+                if not j.q_min <= qh <= j.q_max:
+                    raise ValueError(f"home.{i}: {qh} outside [q_min, q_max] of joint {i}")
+        return self
+
+
+class URDFRobotSpec(_Strict):
+    """A serial chain given as URDF text (revolute/prismatic/continuous joints)."""
+
+    kind: Literal["urdf"] = "urdf"
+    name: str = Field(min_length=1, max_length=64)
+    urdf: str = Field(min_length=1, max_length=2_000_000)
+    tool_frame: str | None = None
+    motors: dict[str, MotorSpec] = Field(default_factory=dict)
+    gravity: Vec3 = Field(default_factory=lambda: [0.0, 0.0, -9.81])
+    description: str = Field(default="", max_length=4000)
+
+
+RobotSpec = Annotated[DHRobotSpec | URDFRobotSpec, Field(discriminator="kind")]
