@@ -1,0 +1,478 @@
+"""Job lifecycle for workers and the reaper: claims, leases, progress, checkpoints, outcome.
+
+A worker owns a running job through its *lease*: ``lease_owner`` (the worker id) and
+``lease_expires_at``. Every transition is ONE conditional UPDATE whose WHERE clause states the
+expected state, so two workers (or a re-delivered Celery message) can never both win:
+
+- ``claim_job``: queued -> running, or running with an expired lease -> running (attempt + 1);
+- ``heartbeat``: extends the lease, only for the lease owner;
+- ``finish_job`` / ``fail_job`` / ``mark_cancelled``: running -> terminal, only for the owner;
+- ``requeue_expired``: running with an expired lease -> queued (or failed / cancelled).
+
+Worker writes (``record_generation``, ``save_checkpoint``, ``finish_job``, ``fail_job``,
+``mark_cancelled``) raise ``LeaseLostError`` when the caller no longer owns the lease, and then
+write nothing; ``heartbeat`` returns False and ``claim_job`` returns None instead.
+Each function starts with its write statement, so on SQLite it takes the write lock first.
+
+Like the repository, functions take the ``Session`` first and never commit. ``finish_job``
+runs inside a SAVEPOINT, so it is all-or-nothing even within a larger transaction.
+Generation numbers: 0 is the initial population, 1..total_generations the following ones;
+``progress_generation`` is the highest generation recorded.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from datetime import datetime, timedelta
+from typing import Any
+
+from sqlalchemy import ColumnElement, Table, and_, case, func, insert, literal, select, update
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from services.store.errors import LeaseLostError
+from services.store.records import (
+    ArtifactIn,
+    BaselineIn,
+    CheckpointRecord,
+    JobRecord,
+    ParetoPointIn,
+    ReapReport,
+    ResultIn,
+)
+from services.store.repository import fetch_one, get_job, now_utc, rowcount
+from services.store.tables import (
+    ARTIFACTS,
+    BASELINES,
+    CHECKPOINTS,
+    GENERATIONS,
+    JOBS,
+    PARETO_POINTS,
+    RESULTS,
+    JobStatus,
+)
+from services.store.types import UTCDateTime
+
+_RUNNING = JobStatus.RUNNING
+
+
+def _lease_until(now: datetime, lease_s: float) -> datetime:
+    if lease_s <= 0:
+        raise ValueError(f"lease_s must be > 0, got {lease_s}")
+    return now + timedelta(seconds=lease_s)
+
+
+def _owned_by(job_id: str, worker_id: str) -> ColumnElement[bool]:
+    """The job is running and ``worker_id`` holds its lease."""
+    return and_(JOBS.c.id == job_id, JOBS.c.status == _RUNNING, JOBS.c.lease_owner == worker_id)
+
+
+def _expired(now: datetime) -> ColumnElement[bool]:
+    """The job is running and its lease ran out before ``now``."""
+    return and_(JOBS.c.status == _RUNNING, JOBS.c.lease_expires_at < now)
+
+
+def _require_owner(session: Session, job_id: str, worker_id: str, values: dict[str, Any]) -> None:
+    """UPDATE the job with ``values`` if ``worker_id`` owns it, else raise LeaseLostError."""
+    stmt = update(JOBS).where(_owned_by(job_id, worker_id)).values(**values)
+    if rowcount(session.execute(stmt)) == 0:
+        raise LeaseLostError(f"worker {worker_id!r} does not hold the lease of job {job_id}")
+
+
+# --------------------------------------------------------------------------- claims and leases
+
+
+def claim_job(
+    session: Session,
+    job_id: str,
+    worker_id: str,
+    lease_s: float,
+    *,
+    max_attempts: int | None = None,
+    now: datetime | None = None,
+) -> JobRecord | None:
+    """Claim a job for ``worker_id`` with one conditional UPDATE; the claimed job, or None.
+
+    Succeeds for a queued job, or a running job whose lease expired before ``now`` (its worker
+    is presumed dead; only if fewer than ``max_attempts`` claims were made when given). Each
+    claim increments ``attempt_count`` (1 on the first). A cancel-requested job is never
+    claimed. None means: someone else has it, it is finished, or it does not exist, so a
+    re-delivered message is harmless. Read the checkpoint after a claim to resume.
+    """
+    now = now_utc(now)
+    reclaimable = _expired(now)
+    if max_attempts is not None:
+        reclaimable = and_(reclaimable, JOBS.c.attempt_count < max_attempts)
+    stmt = (
+        update(JOBS)
+        .where(
+            JOBS.c.id == job_id,
+            JOBS.c.cancel_requested.is_(False),
+            (JOBS.c.status == JobStatus.QUEUED) | reclaimable,
+        )
+        .values(
+            status=_RUNNING,
+            lease_owner=worker_id,
+            lease_expires_at=_lease_until(now, lease_s),
+            heartbeat_at=now,
+            attempt_count=JOBS.c.attempt_count + 1,
+            started_at=func.coalesce(JOBS.c.started_at, literal(now, UTCDateTime())),
+        )
+    )
+    if rowcount(session.execute(stmt)) == 0:
+        return None
+    return get_job(session, job_id)
+
+
+def heartbeat(
+    session: Session, job_id: str, worker_id: str, lease_s: float, *, now: datetime | None = None
+) -> bool:
+    """Extend the lease to ``now + lease_s``; False if ``worker_id`` no longer owns the job."""
+    now = now_utc(now)
+    stmt = (
+        update(JOBS)
+        .where(_owned_by(job_id, worker_id))
+        .values(lease_expires_at=_lease_until(now, lease_s), heartbeat_at=now)
+    )
+    return rowcount(session.execute(stmt)) > 0
+
+
+# --------------------------------------------------------------------------- progress
+
+
+def _insert_ignoring_duplicates(
+    session: Session, table: Table, values: dict[str, Any], keys: Sequence[str]
+) -> bool:
+    """INSERT unless a row with the same ``keys`` exists; True if a row was inserted."""
+    dialect = session.get_bind().dialect.name
+    if dialect in ("sqlite", "postgresql"):
+        module = sqlite if dialect == "sqlite" else postgresql
+        stmt = (
+            module.insert(table)
+            .values(**values)
+            .on_conflict_do_nothing(index_elements=keys)
+            .returning(table.c.id)
+        )
+        return session.execute(stmt).first() is not None
+    try:
+        with session.begin_nested():
+            session.execute(insert(table).values(**values))
+    except IntegrityError:
+        return False
+    return True
+
+
+def _finite_or_none(value: float | None) -> float | None:
+    if value is None:
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _check_owner(session: Session, job_id: str, worker_id: str) -> None:
+    """Raise LeaseLostError unless ``worker_id`` holds the lease of the running job."""
+    owned = session.execute(select(JOBS.c.id).where(_owned_by(job_id, worker_id))).first()
+    if owned is None:
+        raise LeaseLostError(f"worker {worker_id!r} does not hold the lease of job {job_id}")
+
+
+def record_generation(
+    session: Session,
+    job_id: str,
+    worker_id: str,
+    *,
+    generation: int,
+    n_evals: int,
+    best: Any,
+    wall_time_s: float,
+    hypervolume: float | None = None,
+    now: datetime | None = None,
+) -> bool:
+    """Record one generation and advance the job's progress; idempotent per generation.
+
+    ``best`` is the best objective(s) so far (a number or a list, JSON); it also becomes the
+    job's ``best_objective`` unless a later generation was already recorded. A generation that
+    already has a row (a resumed job re-running it) is ignored: returns False; True when a row
+    was written. Raises LeaseLostError (writing nothing) if ``worker_id`` lost the lease.
+    """
+    now = now_utc(now)
+    generation = int(generation)
+    advance = (
+        update(JOBS)
+        .where(_owned_by(job_id, worker_id), JOBS.c.progress_generation <= generation)
+        .values(progress_generation=generation, best_objective=best)
+    )
+    if rowcount(session.execute(advance)) == 0:
+        _check_owner(session, job_id, worker_id)  # owner, but a later generation is recorded
+    return _insert_ignoring_duplicates(
+        session,
+        GENERATIONS,
+        {
+            "job_id": job_id,
+            "generation": generation,
+            "n_evals": int(n_evals),
+            "best": best,
+            "hypervolume": _finite_or_none(hypervolume),
+            "wall_time_s": float(wall_time_s),
+            "created_at": now,
+        },
+        ("job_id", "generation"),
+    )
+
+
+def save_checkpoint(
+    session: Session,
+    job_id: str,
+    worker_id: str,
+    *,
+    generation: int,
+    state: bytes,
+    now: datetime | None = None,
+) -> None:
+    """Store the optimiser state after ``generation``, replacing an older checkpoint.
+
+    One checkpoint per job is kept (the latest); a checkpoint older than the stored one is
+    ignored. ``state`` is opaque bytes (the worker chooses the encoding).
+    Raises LeaseLostError (writing nothing) if ``worker_id`` lost the lease.
+    """
+    now = now_utc(now)
+    generation = int(generation)
+    _require_owner(session, job_id, worker_id, {"heartbeat_at": now})
+    replaced = session.execute(
+        update(CHECKPOINTS)
+        .where(CHECKPOINTS.c.job_id == job_id, CHECKPOINTS.c.generation <= generation)
+        .values(generation=generation, state=bytes(state), created_at=now)
+    )
+    if rowcount(replaced) == 0:
+        _insert_ignoring_duplicates(
+            session,
+            CHECKPOINTS,
+            {"job_id": job_id, "generation": generation, "state": bytes(state), "created_at": now},
+            ("job_id",),
+        )
+
+
+def latest_checkpoint(session: Session, job_id: str) -> CheckpointRecord | None:
+    """The job's latest checkpoint, or None (start from scratch)."""
+    stmt = select(CHECKPOINTS).where(CHECKPOINTS.c.job_id == job_id)
+    return fetch_one(session, CheckpointRecord, stmt)
+
+
+# --------------------------------------------------------------------------- cancellation
+
+
+def request_cancel(
+    session: Session,
+    job_id: str,
+    *,
+    owner_key_id: str | None = None,
+    now: datetime | None = None,
+) -> JobRecord | None:
+    """Ask for a job to stop; the job afterwards, or None if missing (or another owner's).
+
+    A queued job is cancelled at once; a running job gets ``cancel_requested`` and its worker
+    stops at the next generation (``is_cancel_requested`` then ``mark_cancelled``); a finished
+    job is left as it is.
+    """
+    now = now_utc(now)
+    owner = [] if owner_key_id is None else [JOBS.c.owner_key_id == owner_key_id]
+    session.execute(
+        update(JOBS)
+        .where(JOBS.c.id == job_id, JOBS.c.status == JobStatus.QUEUED, *owner)
+        .values(status=JobStatus.CANCELLED, cancel_requested=True, finished_at=now)
+    )
+    session.execute(
+        update(JOBS)
+        .where(JOBS.c.id == job_id, JOBS.c.status == _RUNNING, *owner)
+        .values(cancel_requested=True)
+    )
+    return get_job(session, job_id, owner_key_id=owner_key_id)
+
+
+def is_cancel_requested(session: Session, job_id: str) -> bool:
+    """True if the job's cancellation was requested (or the job no longer exists: stop)."""
+    flag = session.execute(select(JOBS.c.cancel_requested).where(JOBS.c.id == job_id)).first()
+    return True if flag is None else bool(flag[0])
+
+
+# --------------------------------------------------------------------------- outcomes
+
+
+def _terminal_values(status: JobStatus, now: datetime, **extra: Any) -> dict[str, Any]:
+    return {"status": status, "finished_at": now, "lease_expires_at": None, **extra}
+
+
+def mark_cancelled(
+    session: Session, job_id: str, worker_id: str, *, now: datetime | None = None
+) -> JobRecord:
+    """running -> cancelled by the lease owner (after it saw ``is_cancel_requested``).
+
+    Raises LeaseLostError if ``worker_id`` does not own the lease.
+    """
+    now = now_utc(now)
+    _require_owner(session, job_id, worker_id, _terminal_values(JobStatus.CANCELLED, now))
+    record = get_job(session, job_id)
+    assert record is not None
+    return record
+
+
+def fail_job(
+    session: Session,
+    job_id: str,
+    worker_id: str | None,
+    message: str,
+    *,
+    now: datetime | None = None,
+) -> JobRecord:
+    """running -> failed with ``message`` (say what the user can change).
+
+    ``worker_id`` must own the lease (LeaseLostError otherwise); ``None`` fails a queued or
+    running job whoever holds it (CLI, API, admin), and raises LeaseLostError if it is already
+    finished.
+    """
+    now = now_utc(now)
+    values = _terminal_values(JobStatus.FAILED, now, error_message=str(message))
+    if worker_id is not None:
+        _require_owner(session, job_id, worker_id, values)
+    else:
+        stmt = (
+            update(JOBS)
+            .where(JOBS.c.id == job_id, JOBS.c.status.in_([JobStatus.QUEUED, _RUNNING]))
+            .values(**values)
+        )
+        if rowcount(session.execute(stmt)) == 0:
+            raise LeaseLostError(f"job {job_id} is missing or already finished")
+    record = get_job(session, job_id)
+    assert record is not None
+    return record
+
+
+def finish_job(
+    session: Session,
+    job_id: str,
+    worker_id: str,
+    *,
+    result: ResultIn,
+    pareto: Iterable[ParetoPointIn] = (),
+    baselines: Iterable[BaselineIn] = (),
+    artifacts: Iterable[ArtifactIn] = (),
+    warnings: Iterable[str] = (),
+    now: datetime | None = None,
+) -> JobRecord:
+    """running -> succeeded, writing result, Pareto front, baselines and artifact rows at once.
+
+    All-or-nothing (inside a SAVEPOINT): if any row fails (e.g. two Pareto points with the same
+    index) the exception propagates and neither the rows nor the status change are kept.
+    ``warnings`` are appended to the job's warnings. Raises LeaseLostError, writing nothing,
+    if ``worker_id`` does not own the lease.
+    """
+    now = now_utc(now)
+    with session.begin_nested():
+        _require_owner(
+            session,
+            job_id,
+            worker_id,
+            _terminal_values(
+                JobStatus.SUCCEEDED,
+                now,
+                progress_generation=case(
+                    (
+                        JOBS.c.progress_generation < JOBS.c.total_generations,
+                        JOBS.c.total_generations,
+                    ),
+                    else_=JOBS.c.progress_generation,
+                ),
+            ),
+        )
+        extra = [str(w) for w in warnings]
+        if extra:
+            current = session.execute(select(JOBS.c.warnings).where(JOBS.c.id == job_id)).scalar()
+            session.execute(
+                update(JOBS).where(JOBS.c.id == job_id).values(warnings=[*(current or []), *extra])
+            )
+        session.execute(
+            insert(RESULTS).values(
+                job_id=job_id,
+                best_x=result.best_x,
+                objectives=result.objectives,
+                metrics=result.metrics,
+                summary=result.summary,
+                created_at=now,
+            )
+        )
+        rows = [
+            {"job_id": job_id, "index": int(p.index), "x": p.x, "objectives": p.objectives}
+            for p in pareto
+        ]
+        if rows:
+            session.execute(insert(PARETO_POINTS), rows)
+        rows = [{"job_id": job_id, "name": b.name, "metrics": b.metrics} for b in baselines]
+        if rows:
+            session.execute(insert(BASELINES), rows)
+        rows = [
+            {
+                "job_id": job_id,
+                "kind": a.kind,
+                "relative_path": a.relative_path,
+                "sha256": a.sha256,
+                "size_bytes": int(a.size_bytes),
+                "created_at": now,
+            }
+            for a in artifacts
+        ]
+        if rows:
+            session.execute(insert(ARTIFACTS), rows)
+    record = get_job(session, job_id)
+    assert record is not None
+    return record
+
+
+# --------------------------------------------------------------------------- reaper
+
+
+def expired_leases(session: Session, now: datetime | None = None) -> tuple[str, ...]:
+    """Ids of running jobs whose lease expired before ``now`` (their workers are presumed dead)."""
+    stmt = select(JOBS.c.id).where(_expired(now_utc(now))).order_by(JOBS.c.lease_expires_at)
+    return tuple(session.execute(stmt).scalars())
+
+
+def requeue_expired(
+    session: Session, now: datetime | None = None, *, max_attempts: int | None = None
+) -> ReapReport:
+    """Put running jobs with an expired lease back to queued; returns what happened to whom.
+
+    Jobs whose cancellation was requested become cancelled; with ``max_attempts``, jobs
+    already claimed that many times become failed (a job that keeps killing its worker).
+    The caller re-sends a queue message for each requeued id. Each step is one conditional
+    UPDATE, so a concurrent ``claim_job`` or ``heartbeat`` cannot be overwritten.
+    """
+    now = now_utc(now)
+
+    def _update(condition: ColumnElement[bool], values: dict[str, Any]) -> tuple[str, ...]:
+        stmt = update(JOBS).where(_expired(now), condition).values(**values).returning(JOBS.c.id)
+        return tuple(sorted(session.execute(stmt).scalars()))
+
+    cancelled = _update(
+        JOBS.c.cancel_requested.is_(True), _terminal_values(JobStatus.CANCELLED, now)
+    )
+    failed: tuple[str, ...] = ()
+    if max_attempts is not None:
+        failed = _update(
+            JOBS.c.attempt_count >= max_attempts,
+            _terminal_values(
+                JobStatus.FAILED,
+                now,
+                error_message=(
+                    f"the worker running this job stopped responding {max_attempts} times "
+                    "(lease expired); it may need more memory or time: reduce the population, "
+                    "generations or samples, or raise the worker limits"
+                ),
+            ),
+        )
+    requeued = _update(
+        JOBS.c.id.is_not(None),
+        {"status": JobStatus.QUEUED, "lease_owner": None, "lease_expires_at": None},
+    )
+    return ReapReport(requeued=requeued, failed=failed, cancelled=cancelled)

@@ -1,0 +1,212 @@
+"""Frozen dataclasses handed out by the repository, and the inputs of the worker's writes.
+
+Records are snapshots of rows: assigning an attribute raises ``FrozenInstanceError``; no live
+ORM object ever leaves the store. JSON fields are fresh plain ``dict``/``list`` copies (so a
+caller mutating one cannot affect the store); collections of rows are tuples. Datetimes are
+timezone-aware UTC.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any, Generic, TypeVar
+
+from services.store.tables import JobStatus, RobotSource
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True, slots=True)
+class Page(Generic[T]):
+    """One page of a listing: ``items`` plus the ``total`` number of matching rows."""
+
+    items: tuple[T, ...]
+    total: int
+    limit: int
+    offset: int
+
+
+@dataclass(frozen=True, slots=True)
+class ApiKeyRecord:
+    """An API key (the hash stays in the store)."""
+
+    id: str
+    name: str
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
+class RobotRecord:
+    """A stored robot model."""
+
+    id: str
+    owner_key_id: str
+    name: str
+    source_kind: RobotSource
+    spec: Any
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
+class SweepRecord:
+    """A sweep: base spec plus axes; its jobs carry ``sweep_id``."""
+
+    id: str
+    owner_key_id: str
+    base_spec: Any
+    axes: Any
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
+class JobRecord:
+    """A job row: spec, lifecycle, lease and progress."""
+
+    id: str
+    owner_key_id: str
+    sweep_id: str | None
+    status: JobStatus
+    spec: Any
+    progress_generation: int
+    total_generations: int
+    best_objective: Any
+    lease_owner: str | None
+    lease_expires_at: datetime | None
+    heartbeat_at: datetime | None
+    attempt_count: int
+    cancel_requested: bool
+    error_message: str | None
+    warnings: list[str]
+    created_at: datetime
+    started_at: datetime | None
+    finished_at: datetime | None
+
+    @property
+    def is_terminal(self) -> bool:
+        """True once the job succeeded, failed or was cancelled."""
+        return self.status.is_terminal
+
+    @property
+    def progress(self) -> float:
+        """Fraction of generations done, in [0, 1] (1 for a succeeded job)."""
+        if self.status is JobStatus.SUCCEEDED:
+            return 1.0
+        if self.total_generations <= 0:
+            return 0.0
+        return min(1.0, self.progress_generation / self.total_generations)
+
+
+@dataclass(frozen=True, slots=True)
+class GenerationRecord:
+    """Progress of one generation."""
+
+    job_id: str
+    generation: int
+    n_evals: int
+    best: Any
+    hypervolume: float | None
+    wall_time_s: float
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
+class CheckpointRecord:
+    """The latest optimiser state of a job (opaque bytes written by the worker)."""
+
+    job_id: str
+    generation: int
+    state: bytes
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
+class ResultRecord:
+    """Final result of a succeeded job."""
+
+    job_id: str
+    best_x: Any
+    objectives: Any
+    metrics: Any
+    summary: Any
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
+class ParetoPointRecord:
+    """One point of a job's final Pareto front."""
+
+    job_id: str
+    index: int
+    x: Any
+    objectives: Any
+
+
+@dataclass(frozen=True, slots=True)
+class BaselineRecord:
+    """A baseline solution's metrics."""
+
+    job_id: str
+    name: str
+    metrics: Any
+
+
+@dataclass(frozen=True, slots=True)
+class ArtifactRecord:
+    """A file of a job in the artifact store."""
+
+    job_id: str
+    kind: str
+    relative_path: str
+    sha256: str
+    size_bytes: int
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
+class ReapReport:
+    """What ``requeue_expired`` did with the jobs whose lease had expired."""
+
+    requeued: tuple[str, ...]
+    failed: tuple[str, ...]
+    cancelled: tuple[str, ...]
+
+
+# Inputs of ``finish_job`` (the worker builds these; JSON fields may hold numpy values).
+
+
+@dataclass(frozen=True, slots=True)
+class ResultIn:
+    """The final result to store with ``finish_job``."""
+
+    best_x: Any = None
+    objectives: Any = None
+    metrics: Any = None
+    summary: Any = None
+
+
+@dataclass(frozen=True, slots=True)
+class ParetoPointIn:
+    """A Pareto point to store with ``finish_job`` (``index`` unique per job)."""
+
+    index: int
+    x: Any
+    objectives: Any
+
+
+@dataclass(frozen=True, slots=True)
+class BaselineIn:
+    """A baseline to store with ``finish_job`` (``name`` unique per job)."""
+
+    name: str
+    metrics: Any
+
+
+@dataclass(frozen=True, slots=True)
+class ArtifactIn:
+    """An artifact row to store with ``finish_job``; fields as returned by ``ArtifactStore.put``."""
+
+    kind: str
+    relative_path: str
+    sha256: str
+    size_bytes: int

@@ -1,0 +1,444 @@
+"""Create and read functions of the store (API keys, robots, sweeps, jobs and job outputs).
+
+Every function takes the ``Session`` first and never commits: wrap calls in
+``session_scope()``, which makes everything inside one transaction. Rows come back as frozen
+records (``services.store.records``), never as live ORM objects. Statements are Core
+statements on the mapped tables, so no ORM identity map can hand out stale rows after the
+conditional UPDATEs of ``services.store.lifecycle``.
+
+``owner_key_id`` arguments of the getters scope a lookup to one API key: a row of another owner
+reads as missing (the API answers 404 rather than 403, so ids of others do not leak).
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Iterable, Mapping
+from dataclasses import fields
+from datetime import datetime
+from typing import Any, TypeVar
+
+from sqlalchemy import ColumnElement, Select, Table, delete, func, insert, select
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from services.store.errors import ConflictError
+from services.store.records import (
+    ApiKeyRecord,
+    ArtifactRecord,
+    BaselineRecord,
+    GenerationRecord,
+    JobRecord,
+    Page,
+    ParetoPointRecord,
+    ResultRecord,
+    RobotRecord,
+    SweepRecord,
+)
+from services.store.tables import (
+    API_KEYS,
+    ARTIFACTS,
+    BASELINES,
+    GENERATIONS,
+    JOBS,
+    PARETO_POINTS,
+    RESULTS,
+    ROBOTS,
+    SWEEPS,
+    JobStatus,
+    RobotSource,
+    new_id,
+)
+from services.store.types import as_utc, utcnow
+
+R = TypeVar("R")
+
+MAX_PAGE_SIZE = 1000
+
+# --------------------------------------------------------------------------- helpers
+
+
+def now_utc(now: datetime | None = None) -> datetime:
+    """``now`` converted to UTC (must be timezone-aware), or the current UTC time."""
+    return utcnow() if now is None else as_utc(now)
+
+
+def to_record(cls: type[R], row: Mapping[Any, Any]) -> R:
+    """Build the frozen record ``cls`` from a row mapping, deep-copying JSON values."""
+    values = {}
+    for f in fields(cls):  # type: ignore[arg-type]
+        value = row[f.name]
+        if isinstance(value, dict | list):
+            value = copy.deepcopy(value)
+        values[f.name] = value
+    return cls(**values)
+
+
+def fetch_one(session: Session, cls: type[R], stmt: Select[Any]) -> R | None:
+    """First row of ``stmt`` as a record, or None."""
+    row = session.execute(stmt).mappings().first()
+    return None if row is None else to_record(cls, row)
+
+
+def fetch_all(session: Session, cls: type[R], stmt: Select[Any]) -> tuple[R, ...]:
+    """All rows of ``stmt`` as records."""
+    return tuple(to_record(cls, row) for row in session.execute(stmt).mappings())
+
+
+def rowcount(result: Any) -> int:
+    """Rows matched by an UPDATE or DELETE result."""
+    return int(result.rowcount)
+
+
+def _check_page(limit: int, offset: int) -> None:
+    if not 1 <= limit <= MAX_PAGE_SIZE:
+        raise ValueError(f"limit must be in [1, {MAX_PAGE_SIZE}], got {limit}")
+    if offset < 0:
+        raise ValueError(f"offset must be >= 0, got {offset}")
+
+
+def fetch_page(
+    session: Session,
+    cls: type[R],
+    stmt: Select[Any],
+    order_by: Iterable[ColumnElement[Any]],
+    limit: int,
+    offset: int,
+) -> Page[R]:
+    """One page of ``stmt`` (ordered by ``order_by``) with the total count of its rows."""
+    _check_page(limit, offset)
+    total = session.execute(select(func.count()).select_from(stmt.subquery())).scalar_one()
+    items = fetch_all(session, cls, stmt.order_by(*order_by).limit(limit).offset(offset))
+    return Page(items=items, total=int(total), limit=limit, offset=offset)
+
+
+def insert_or_conflict(session: Session, table: Table, values: dict[str, Any], what: str) -> None:
+    """INSERT one row inside a SAVEPOINT; a unique violation raises ``ConflictError``.
+
+    The savepoint keeps the caller's transaction usable after the conflict.
+    """
+    try:
+        with session.begin_nested():
+            session.execute(insert(table).values(**values))
+    except IntegrityError as exc:
+        raise ConflictError(what) from exc
+
+
+def _owned(table: Table, owner_key_id: str | None) -> list[ColumnElement[bool]]:
+    return [] if owner_key_id is None else [table.c.owner_key_id == owner_key_id]
+
+
+# --------------------------------------------------------------------------- API keys
+
+
+def create_api_key(
+    session: Session, *, name: str, key_hash: str, now: datetime | None = None
+) -> ApiKeyRecord:
+    """Store a new API key by its hash (``keys.hash_api_key``); ConflictError if the hash exists."""
+    key_id = new_id()
+    insert_or_conflict(
+        session,
+        API_KEYS,
+        {"id": key_id, "name": name, "key_hash": key_hash, "created_at": now_utc(now)},
+        "an API key with this hash already exists",
+    )
+    record = get_api_key(session, key_id)
+    assert record is not None
+    return record
+
+
+def get_api_key(session: Session, key_id: str) -> ApiKeyRecord | None:
+    """The API key with this id, or None."""
+    return fetch_one(session, ApiKeyRecord, select(API_KEYS).where(API_KEYS.c.id == key_id))
+
+
+def get_api_key_by_hash(session: Session, key_hash: str) -> ApiKeyRecord | None:
+    """The API key whose hash is ``key_hash`` (authentication lookup), or None."""
+    stmt = select(API_KEYS).where(API_KEYS.c.key_hash == key_hash)
+    return fetch_one(session, ApiKeyRecord, stmt)
+
+
+def list_api_keys(session: Session, *, limit: int = 50, offset: int = 0) -> Page[ApiKeyRecord]:
+    """API keys, oldest first."""
+    return fetch_page(
+        session,
+        ApiKeyRecord,
+        select(API_KEYS),
+        (API_KEYS.c.created_at, API_KEYS.c.id),
+        limit,
+        offset,
+    )
+
+
+def delete_api_key(session: Session, key_id: str) -> bool:
+    """Delete an API key and everything it owns (cascade). True if it existed."""
+    return rowcount(session.execute(delete(API_KEYS).where(API_KEYS.c.id == key_id))) > 0
+
+
+# --------------------------------------------------------------------------- robots
+
+
+def create_robot(
+    session: Session,
+    *,
+    owner_key_id: str,
+    name: str,
+    source_kind: RobotSource | str,
+    spec: Any,
+    now: datetime | None = None,
+) -> RobotRecord:
+    """Store a robot model; ConflictError if the owner already has a robot of this name."""
+    robot_id = new_id()
+    insert_or_conflict(
+        session,
+        ROBOTS,
+        {
+            "id": robot_id,
+            "owner_key_id": owner_key_id,
+            "name": name,
+            "source_kind": RobotSource(source_kind),
+            "spec": spec,
+            "created_at": now_utc(now),
+        },
+        f"a robot named {name!r} already exists",
+    )
+    record = get_robot(session, robot_id)
+    assert record is not None
+    return record
+
+
+def get_robot(
+    session: Session, robot_id: str, *, owner_key_id: str | None = None
+) -> RobotRecord | None:
+    """The robot with this id (of this owner when given), or None."""
+    stmt = select(ROBOTS).where(ROBOTS.c.id == robot_id, *_owned(ROBOTS, owner_key_id))
+    return fetch_one(session, RobotRecord, stmt)
+
+
+def get_robot_by_name(session: Session, *, owner_key_id: str, name: str) -> RobotRecord | None:
+    """The owner's robot called ``name``, or None."""
+    stmt = select(ROBOTS).where(ROBOTS.c.owner_key_id == owner_key_id, ROBOTS.c.name == name)
+    return fetch_one(session, RobotRecord, stmt)
+
+
+def list_robots(
+    session: Session, *, owner_key_id: str | None = None, limit: int = 50, offset: int = 0
+) -> Page[RobotRecord]:
+    """Robots (of one owner when given), by name."""
+    stmt = select(ROBOTS).where(*_owned(ROBOTS, owner_key_id))
+    return fetch_page(session, RobotRecord, stmt, (ROBOTS.c.name, ROBOTS.c.id), limit, offset)
+
+
+def delete_robot(session: Session, robot_id: str, *, owner_key_id: str | None = None) -> bool:
+    """Delete a robot (of this owner when given). True if a row was deleted."""
+    stmt = delete(ROBOTS).where(ROBOTS.c.id == robot_id, *_owned(ROBOTS, owner_key_id))
+    return rowcount(session.execute(stmt)) > 0
+
+
+# --------------------------------------------------------------------------- sweeps
+
+
+def create_sweep(
+    session: Session,
+    *,
+    owner_key_id: str,
+    base_spec: Any,
+    axes: Any,
+    now: datetime | None = None,
+) -> SweepRecord:
+    """Store a sweep; create its jobs with ``create_job(..., sweep_id=sweep.id)`` in the same
+    ``session_scope`` so the sweep and its jobs appear together."""
+    sweep_id = new_id()
+    session.execute(
+        insert(SWEEPS).values(
+            id=sweep_id,
+            owner_key_id=owner_key_id,
+            base_spec=base_spec,
+            axes=axes,
+            created_at=now_utc(now),
+        )
+    )
+    record = get_sweep(session, sweep_id)
+    assert record is not None
+    return record
+
+
+def get_sweep(
+    session: Session, sweep_id: str, *, owner_key_id: str | None = None
+) -> SweepRecord | None:
+    """The sweep with this id (of this owner when given), or None."""
+    stmt = select(SWEEPS).where(SWEEPS.c.id == sweep_id, *_owned(SWEEPS, owner_key_id))
+    return fetch_one(session, SweepRecord, stmt)
+
+
+def list_sweeps(
+    session: Session, *, owner_key_id: str | None = None, limit: int = 50, offset: int = 0
+) -> Page[SweepRecord]:
+    """Sweeps (of one owner when given), newest first."""
+    stmt = select(SWEEPS).where(*_owned(SWEEPS, owner_key_id))
+    return fetch_page(
+        session,
+        SweepRecord,
+        stmt,
+        (SWEEPS.c.created_at.desc(), SWEEPS.c.id),
+        limit,
+        offset,
+    )
+
+
+# --------------------------------------------------------------------------- jobs
+
+
+def create_job(
+    session: Session,
+    *,
+    owner_key_id: str,
+    spec: Any,
+    total_generations: int = 0,
+    sweep_id: str | None = None,
+    warnings: Iterable[str] = (),
+    now: datetime | None = None,
+) -> JobRecord:
+    """Store a queued job. Send its id to the queue only after the scope has committed."""
+    job_id = new_id()
+    session.execute(
+        insert(JOBS).values(
+            id=job_id,
+            owner_key_id=owner_key_id,
+            sweep_id=sweep_id,
+            status=JobStatus.QUEUED,
+            spec=spec,
+            progress_generation=0,
+            total_generations=int(total_generations),
+            attempt_count=0,
+            cancel_requested=False,
+            warnings=[str(w) for w in warnings],
+            created_at=now_utc(now),
+        )
+    )
+    record = get_job(session, job_id)
+    assert record is not None
+    return record
+
+
+def get_job(session: Session, job_id: str, *, owner_key_id: str | None = None) -> JobRecord | None:
+    """The job with this id (of this owner when given), or None."""
+    stmt = select(JOBS).where(JOBS.c.id == job_id, *_owned(JOBS, owner_key_id))
+    return fetch_one(session, JobRecord, stmt)
+
+
+def _statuses(status: JobStatus | str | Iterable[JobStatus | str]) -> list[JobStatus]:
+    if isinstance(status, str):
+        return [JobStatus(status)]
+    return [JobStatus(s) for s in status]
+
+
+def list_jobs(
+    session: Session,
+    *,
+    owner_key_id: str | None = None,
+    status: JobStatus | str | Iterable[JobStatus | str] | None = None,
+    sweep_id: str | None = None,
+    limit: int = 50,
+    offset: int = 0,
+) -> Page[JobRecord]:
+    """Jobs filtered by owner, status (one or several) and sweep, newest first."""
+    conditions = _owned(JOBS, owner_key_id)
+    if status is not None:
+        conditions.append(JOBS.c.status.in_(_statuses(status)))
+    if sweep_id is not None:
+        conditions.append(JOBS.c.sweep_id == sweep_id)
+    stmt = select(JOBS).where(*conditions)
+    return fetch_page(
+        session, JobRecord, stmt, (JOBS.c.created_at.desc(), JOBS.c.id), limit, offset
+    )
+
+
+def count_jobs_by_status(
+    session: Session, *, owner_key_id: str | None = None, sweep_id: str | None = None
+) -> dict[JobStatus, int]:
+    """Number of jobs in each status (every status present, zero when none)."""
+    conditions = _owned(JOBS, owner_key_id)
+    if sweep_id is not None:
+        conditions.append(JOBS.c.sweep_id == sweep_id)
+    stmt = select(JOBS.c.status, func.count()).where(*conditions).group_by(JOBS.c.status)
+    counts = {s: 0 for s in JobStatus}
+    for status, n in session.execute(stmt):
+        counts[JobStatus(status)] = int(n)
+    return counts
+
+
+# --------------------------------------------------------------------------- job outputs
+
+
+def list_generations(
+    session: Session, job_id: str, *, after: int | None = None, limit: int = MAX_PAGE_SIZE
+) -> tuple[GenerationRecord, ...]:
+    """Generation rows of a job in order; ``after`` returns only later generations (polling)."""
+    _check_page(limit, 0)
+    stmt = select(GENERATIONS).where(GENERATIONS.c.job_id == job_id)
+    if after is not None:
+        stmt = stmt.where(GENERATIONS.c.generation > after)
+    stmt = stmt.order_by(GENERATIONS.c.generation).limit(limit)
+    return fetch_all(session, GenerationRecord, stmt)
+
+
+def get_result(session: Session, job_id: str) -> ResultRecord | None:
+    """The final result of a job, or None until it has succeeded."""
+    return fetch_one(session, ResultRecord, select(RESULTS).where(RESULTS.c.job_id == job_id))
+
+
+def list_pareto(session: Session, job_id: str) -> tuple[ParetoPointRecord, ...]:
+    """The final Pareto front of a job, by index (empty until it has succeeded)."""
+    stmt = (
+        select(PARETO_POINTS)
+        .where(PARETO_POINTS.c.job_id == job_id)
+        .order_by(PARETO_POINTS.c.index)
+    )
+    return fetch_all(session, ParetoPointRecord, stmt)
+
+
+def list_baselines(session: Session, job_id: str) -> tuple[BaselineRecord, ...]:
+    """Baselines stored with a job's result, by name."""
+    stmt = select(BASELINES).where(BASELINES.c.job_id == job_id).order_by(BASELINES.c.name)
+    return fetch_all(session, BaselineRecord, stmt)
+
+
+def list_artifacts(session: Session, job_id: str) -> tuple[ArtifactRecord, ...]:
+    """Artifacts of a job, by kind."""
+    stmt = select(ARTIFACTS).where(ARTIFACTS.c.job_id == job_id).order_by(ARTIFACTS.c.kind)
+    return fetch_all(session, ArtifactRecord, stmt)
+
+
+def get_artifact(session: Session, job_id: str, kind: str) -> ArtifactRecord | None:
+    """The artifact of ``kind`` (e.g. ``"recording"``) of a job, or None."""
+    stmt = select(ARTIFACTS).where(ARTIFACTS.c.job_id == job_id, ARTIFACTS.c.kind == kind)
+    return fetch_one(session, ArtifactRecord, stmt)
+
+
+__all__ = [
+    "MAX_PAGE_SIZE",
+    "count_jobs_by_status",
+    "create_api_key",
+    "create_job",
+    "create_robot",
+    "create_sweep",
+    "delete_api_key",
+    "delete_robot",
+    "get_api_key",
+    "get_api_key_by_hash",
+    "get_artifact",
+    "get_job",
+    "get_result",
+    "get_robot",
+    "get_robot_by_name",
+    "get_sweep",
+    "list_api_keys",
+    "list_artifacts",
+    "list_baselines",
+    "list_generations",
+    "list_jobs",
+    "list_pareto",
+    "list_robots",
+    "list_sweeps",
+]

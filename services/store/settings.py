@@ -1,0 +1,157 @@
+"""The one settings object of the service, read from ``LEGOPT_*`` environment variables.
+
+Every field has an embedded default so that ``legopt`` runs on a machine with nothing installed:
+a SQLite file, an artifact directory and a filesystem broker, all under ``./legopt-data``
+(relative to the working directory). Compose overrides them with PostgreSQL and Redis URLs.
+
+``get_settings()`` reads the environment once and caches the result; tests build their own with
+``Settings.from_env(env={}, database_url=...)`` or ``get_settings().with_overrides(...)``.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+ENV_PREFIX = "LEGOPT_"
+DEFAULT_DATA_DIR = Path("legopt-data")
+
+
+class Settings(BaseModel):
+    """Immutable service configuration (one instance per process, see ``get_settings``).
+
+    Environment variable of each field: ``LEGOPT_`` + the field name in upper case, e.g.
+    ``LEGOPT_DATABASE_URL``. Defaults that are ``None`` below are derived from ``data_dir``.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    data_dir: Path = Field(
+        default=DEFAULT_DATA_DIR,
+        description="Root of everything the embedded mode writes (database, artifacts, broker).",
+    )
+    database_url: str = Field(
+        default="",
+        description="SQLAlchemy URL; default sqlite:///<data_dir>/legopt.db.",
+    )
+    broker_url: str = Field(
+        default="filesystem://",
+        description="Celery broker URL; 'filesystem://' is the embedded broker under broker_dir.",
+    )
+    result_backend: str | None = Field(
+        default=None,
+        description="Celery result backend URL; None: none (job state lives in the jobs table).",
+    )
+    artifact_dir: Path = Field(
+        default=Path(),
+        description="Directory of the local artifact store; default <data_dir>/artifacts.",
+    )
+
+    # Limits that stop a single request from taking the cluster.
+    max_population: int = Field(default=2_000, gt=0, description="Max population per job.")
+    max_generations: int = Field(default=5_000, gt=0, description="Max generations per job.")
+    max_samples: int = Field(default=20_000, gt=0, description="Max trajectory samples per eval.")
+    max_work: int = Field(
+        default=500_000_000,
+        gt=0,
+        description="Max population x generations x samples of one job.",
+    )
+
+    # Leases of running jobs.
+    lease_seconds: float = Field(default=60.0, gt=0, description="Lease length of a claim.")
+    heartbeat_seconds: float = Field(default=15.0, gt=0, description="Heartbeat period.")
+    max_attempts: int = Field(
+        default=3, gt=0, description="Claims of one job before the reaper fails it."
+    )
+    sqlite_busy_timeout_ms: int = Field(
+        default=30_000, ge=0, description="SQLite busy_timeout of every connection."
+    )
+    db_echo: bool = Field(default=False, description="Log every SQL statement.")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _derive_defaults(cls, data: Any) -> Any:
+        """Fill the data-dir-relative defaults (database URL, artifact dir)."""
+        if not isinstance(data, dict):
+            return data
+        data = dict(data)
+        data_dir = Path(data.get("data_dir") or DEFAULT_DATA_DIR)
+        data["data_dir"] = data_dir
+        if not data.get("database_url"):
+            data["database_url"] = f"sqlite:///{data_dir.as_posix()}/legopt.db"
+        if not data.get("artifact_dir"):
+            data["artifact_dir"] = data_dir / "artifacts"
+        if data.get("result_backend") == "":
+            data["result_backend"] = None
+        return data
+
+    @model_validator(mode="after")
+    def _check_lease(self) -> Settings:
+        if self.heartbeat_seconds >= self.lease_seconds:
+            raise ValueError(
+                f"heartbeat_seconds ({self.heartbeat_seconds}) must be shorter than "
+                f"lease_seconds ({self.lease_seconds})"
+            )
+        return self
+
+    @property
+    def broker_dir(self) -> Path:
+        """Folder of the embedded filesystem broker (used when ``broker_url`` is filesystem://)."""
+        return self.data_dir / "broker"
+
+    @property
+    def is_sqlite(self) -> bool:
+        """True when the database is SQLite (embedded mode)."""
+        return self.database_url.startswith("sqlite")
+
+    def check_job_size(self, population: int, generations: int, samples: int = 1) -> str | None:
+        """Return why a job of this size is refused, or None when it fits the limits."""
+        if population > self.max_population:
+            return f"population {population} exceeds the limit {self.max_population}"
+        if generations > self.max_generations:
+            return f"generations {generations} exceed the limit {self.max_generations}"
+        if samples > self.max_samples:
+            return f"samples {samples} exceed the limit {self.max_samples}"
+        work = population * generations * samples
+        if work > self.max_work:
+            return f"population x generations x samples = {work} exceeds the limit {self.max_work}"
+        return None
+
+    def with_overrides(self, **overrides: Any) -> Settings:
+        """A validated copy with some fields replaced.
+
+        Fields derived from ``data_dir`` keep their current value unless overridden too.
+        """
+        data = self.model_dump()
+        data.update(overrides)
+        return Settings(**data)
+
+    @classmethod
+    def from_env(cls, env: Mapping[str, str] | None = None, **overrides: Any) -> Settings:
+        """Build settings from ``LEGOPT_*`` variables of ``env`` (default ``os.environ``).
+
+        Keyword ``overrides`` win over the environment; ``env={}`` ignores the environment.
+        Unknown ``LEGOPT_*`` variables are ignored (other components own some of them).
+        """
+        source = os.environ if env is None else env
+        data: dict[str, Any] = {}
+        for name in cls.model_fields:
+            value = source.get(ENV_PREFIX + name.upper())
+            if value is not None:
+                data[name] = value
+        data.update(overrides)
+        return cls(**data)
+
+
+@lru_cache(maxsize=1)
+def get_settings() -> Settings:
+    """The process-wide settings, read from the environment on first call and cached.
+
+    Call ``get_settings.cache_clear()`` after changing the environment (tests).
+    """
+    return Settings.from_env()
