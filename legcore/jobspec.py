@@ -1,0 +1,84 @@
+"""The job specification: one document for `legopt run`, `POST /api/v1/jobs` and the worker.
+
+    {"robot": "calderon_leg",                      # catalog name, or an inline robot spec
+     "problem": {"kind": "swing_energy", ...},     # study kind + its parameters
+     "optimizer": {"kind": "ga", "params": {...}}, # optional: the seed's own by default
+     "seed": 1,
+     "budget": {"generations": 100},               # optional: the seed's own by default
+     "record": true}
+
+Unknown keys are rejected everywhere; every error names its field (``problem.obstacle``).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, model_validator
+
+from legcore.optimizers import get_algorithm
+from legcore.problems.registry import studies
+from legcore.robots.spec import RobotSpec
+
+__all__ = ["Budget", "JobSpec", "OptimizerSpec", "parse_job_spec", "ProblemSpec"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class OptimizerSpec(_Strict):
+    """An optimiser by kind with its parameters (see docs/optimizers.md for each kind's)."""
+
+    kind: Literal["ga", "hka", "moead", "nsga2"]
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _params_valid(self) -> OptimizerSpec:
+        try:
+            get_algorithm(self.kind, **self.params)
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"params.{exc}") from None
+        return self
+
+
+class Budget(_Strict):
+    """When to stop: any of the given limits (none given → the study's default generations)."""
+
+    generations: int | None = Field(default=None, ge=1, le=100_000)
+    evaluations: int | None = Field(default=None, ge=1, le=10**9)
+    wall_time_s: float | None = Field(default=None, gt=0, le=7 * 24 * 3600)
+
+
+def _problem_union() -> Any:
+    params = [s.params for s in studies().values()]
+    if not params:
+        raise RuntimeError("no study kinds are available")
+    union = params[0] if len(params) == 1 else Union[tuple(params)]  # noqa: UP007
+    return Annotated[union, Field(discriminator="kind")]
+
+
+ProblemSpec = _problem_union()
+
+
+class JobSpec(_Strict):
+    """A whole job. ``robot`` None means the study's default robot; ``optimizer`` None the
+    seed's algorithm and settings; an empty ``budget`` the seed's number of generations."""
+
+    name: str | None = Field(default=None, max_length=200)
+    robot: str | RobotSpec | None = None
+    problem: ProblemSpec  # type: ignore[valid-type]
+    optimizer: OptimizerSpec | None = None
+    seed: int = Field(default=0, ge=0, le=2**32 - 1)
+    budget: Budget = Field(default_factory=Budget)
+    record: bool = True
+
+
+_ADAPTER = TypeAdapter(JobSpec)
+
+
+def parse_job_spec(data: dict[str, Any] | JobSpec) -> JobSpec:
+    """Validate a mapping (from JSON/YAML) into a :class:`JobSpec` (pydantic ValidationError)."""
+    if isinstance(data, JobSpec):
+        return data
+    return _ADAPTER.validate_python(data)

@@ -1,0 +1,173 @@
+"""What a seed study adds on top of a plain `Problem`: parameters, decoded solutions, baselines.
+
+A study module (``legcore/problems/<kind>.py``) defines
+
+- ``Params`` — a :class:`StudyParams` subclass with ``kind: Literal["<kind>"]`` and the study's
+  parameters, every default being the seed paper's own setting;
+- a :class:`StudyProblem` subclass — vectorised ``_evaluate``, plus ``solution(x)`` (the full
+  decoded trajectory with metrics) and ``baseline_solutions()`` (the paper's reference
+  trajectories, decoded the same way);
+- ``STUDY`` — a :class:`Study` descriptor: default robot, the seed's optimiser and budget, and
+  ``build(robot, params) -> StudyProblem``.
+
+:class:`Motion` is the one time-series format every study decodes to; `legcore.recording` turns
+it into what the worker logs to Rerun, and the CLI/API summarise it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict
+
+from legcore.problems.base import Problem
+
+__all__ = ["Box", "Motion", "Solution", "Study", "StudyParams", "StudyProblem"]
+
+FloatArray = NDArray[np.float64]
+
+
+class StudyParams(BaseModel):
+    """Base of every study's parameter model: strict (unknown keys rejected) and frozen."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    kind: str
+
+
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned box obstacle: ``center`` (3,) and ``half_size`` (3,), m, world frame."""
+
+    center: tuple[float, float, float]
+    half_size: tuple[float, float, float]
+
+    def contains(self, p: FloatArray, margin: float = 0.0) -> NDArray[np.bool_]:
+        """(…,) True where points ``p`` (…, 3) are inside the box grown by ``margin`` (m)."""
+        d = np.abs(np.asarray(p, dtype=float) - np.asarray(self.center))
+        return np.all(d <= np.asarray(self.half_size) + margin, axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class Motion:
+    """Time series of one decoded solution (SI units; K samples, n joints).
+
+    ``t`` (K,) s; ``q``, ``qd``, ``qdd``, ``jerk`` (K, n) rad, rad/s, rad/s², rad/s³; ``tau``
+    (K, n) N·m; ``power`` (K, n) W (signed τ·ω, or electrical power when ``power_kind`` says
+    so); ``energy`` (K,) cumulative J. ``tool`` (K, 3) m: the foot/tool path in the world (or
+    body) frame. ``robot``: catalog name or robot name; ``legs``: for a multi-legged robot, the
+    leg names, and then ``q`` holds the legs' joints side by side (leg-major, ``joint_names``
+    tells which is which). ``scene``: targets (M, 3), obstacles (list of :class:`Box`),
+    support polygon (P, 3) etc., keyed by name.
+    """
+
+    t: FloatArray
+    q: FloatArray
+    joint_names: tuple[str, ...]
+    qd: FloatArray | None = None
+    qdd: FloatArray | None = None
+    jerk: FloatArray | None = None
+    tau: FloatArray | None = None
+    power: FloatArray | None = None
+    energy: FloatArray | None = None
+    tool: FloatArray | None = None
+    robot: str = ""
+    legs: tuple[str, ...] = ()
+    power_kind: str = "mechanical"
+    scene: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        K = self.t.shape[0]
+        if self.q.ndim != 2 or self.q.shape[0] != K:
+            raise ValueError(f"q: expected shape ({K}, n), got {self.q.shape}")
+        if len(self.joint_names) != self.q.shape[1]:
+            raise ValueError("joint_names: one name per column of q")
+        for name in ("qd", "qdd", "jerk", "tau", "power"):
+            a = getattr(self, name)
+            if a is not None and a.shape != self.q.shape:
+                raise ValueError(f"{name}: expected shape {self.q.shape}, got {a.shape}")
+        if self.energy is not None and self.energy.shape != (K,):
+            raise ValueError(f"energy: expected shape ({K},), got {self.energy.shape}")
+        if self.tool is not None and self.tool.shape != (K, 3):
+            raise ValueError(f"tool: expected shape ({K}, 3), got {self.tool.shape}")
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t.shape[0])
+
+
+@dataclass(frozen=True, eq=False)
+class Solution:
+    """A decision vector decoded into everything a report, a table or a recording needs.
+
+    ``objectives``: named objective values (as the paper states them, e.g. the seed 000 score
+    to maximise); ``metrics``: named scalars (energy J, θ_T rad, path length m, feasibility…);
+    ``table``: per-joint rows like seed 000 Table 2 (``{"metric", "unit", "values": [...]}``);
+    ``motion``: the time series (None when the study has none); ``extra``: study-specific
+    JSON-able outputs (servo table, workspace, …).
+    """
+
+    x: FloatArray | None
+    objectives: dict[str, float]
+    metrics: dict[str, float]
+    table: list[dict[str, Any]] = field(default_factory=list)
+    motion: Motion | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-able summary (no time series): x, objectives, metrics, table, extra."""
+        return {
+            "x": None if self.x is None else [float(v) for v in self.x],
+            "objectives": {k: float(v) for k, v in self.objectives.items()},
+            "metrics": {k: float(v) for k, v in self.metrics.items()},
+            "table": self.table,
+            "extra": self.extra,
+        }
+
+
+class StudyProblem(Problem):
+    """A `Problem` that decodes to full solutions and carries its paper's baselines.
+
+    Subclasses set ``objective_names`` (one per objective, in F's column order; minimised) and
+    ``n_samples`` (time samples per evaluated trajectory, used for the job-size limit), and
+    implement ``solution`` and ``baseline_solutions``. ``extras`` may add study-level outputs
+    computed from the final front (e.g. the hexapod's stable/unstable split).
+    """
+
+    objective_names: tuple[str, ...] = ()
+    n_samples: int = 1
+
+    def solution(self, x: FloatArray) -> Solution:  # pragma: no cover - abstract in spirit
+        raise NotImplementedError
+
+    def baseline_solutions(self) -> dict[str, Solution]:
+        return {}
+
+    def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
+        return {}
+
+    def decode(self, x: np.ndarray) -> dict[str, Any]:
+        return self.solution(np.asarray(x, dtype=float)).summary()
+
+
+@dataclass(frozen=True)
+class Study:
+    """Descriptor of a study kind: its parameter model, defaults and problem builder.
+
+    ``default_optimizer`` is ``{"kind": ..., "params": {...}}`` with the seed's settings;
+    ``default_generations`` the seed's budget; ``robot_kinds`` which robots it accepts
+    ("serial" and/or "legged").
+    """
+
+    kind: str
+    title: str
+    seed_paper: str
+    params: type[StudyParams]
+    default_robot: str
+    default_optimizer: dict[str, Any]
+    default_generations: int
+    build: Callable[[Any, Any], StudyProblem]
+    robot_kinds: tuple[str, ...] = ("serial",)

@@ -1,0 +1,175 @@
+"""`legcore.run(spec) -> RunResult`: one job, start to finish, in-process.
+
+The worker uses the same pieces step by step (``prepare`` → ``Run`` → ``finalize``) so that it can
+write progress, checkpoint, cancel and resume between generations; ``run`` is that loop in one
+call. Both produce the same :class:`RunResult` for the same spec and seed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from legcore.jobspec import JobSpec, parse_job_spec
+from legcore.optimizers import Progress, Result, Run, get_algorithm, termination_from_budget
+from legcore.optimizers.base import Algorithm
+from legcore.optimizers.termination import Termination
+from legcore.problems.registry import get_study
+from legcore.problems.study import Solution, Study, StudyProblem
+from legcore.robots import LeggedRobot, Robot, build_robot, catalog
+
+__all__ = ["Prepared", "RunResult", "finalize", "prepare", "resolve_robot", "run"]
+
+
+def resolve_robot(spec: JobSpec, study: Study) -> Robot | LeggedRobot:
+    """The robot of a job: a catalog name, an inline spec, or the study's default robot."""
+    robot_ref = spec.robot if spec.robot is not None else study.default_robot
+    if isinstance(robot_ref, str):
+        try:
+            robot = catalog.get(robot_ref)
+        except KeyError as exc:
+            raise ValueError(f"robot: {exc.args[0]}") from None
+    else:
+        robot = build_robot(robot_ref)
+    kind = "legged" if isinstance(robot, LeggedRobot) else "serial"
+    if kind not in study.robot_kinds:
+        raise ValueError(
+            f"robot: the {study.kind} study needs a {' or '.join(study.robot_kinds)} robot, "
+            f"{getattr(robot, 'name', robot_ref)!r} is {kind}"
+        )
+    return robot
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """Everything needed to run a job: the validated spec and the built objects."""
+
+    spec: JobSpec
+    study: Study
+    robot: Robot | LeggedRobot
+    problem: StudyProblem
+    algorithm: Algorithm
+    termination: Termination
+    total_generations: int | None
+
+    def new_run(self, state: dict[str, Any] | None = None) -> Run:
+        """A fresh `Run` (or one resumed from a checkpoint ``state``)."""
+        return Run(self.problem, self.algorithm, self.termination, seed=self.spec.seed, state=state)
+
+
+def prepare(spec: JobSpec | dict[str, Any]) -> Prepared:
+    """Validate ``spec`` and build robot, problem, algorithm and termination.
+
+    Raises pydantic ``ValidationError`` or ``ValueError`` (message starting with the field) for
+    a spec that cannot run.
+    """
+    spec = parse_job_spec(spec)
+    study = get_study(spec.problem.kind)
+    robot = resolve_robot(spec, study)
+    problem = study.build(robot, spec.problem)
+    opt = spec.optimizer
+    kind = opt.kind if opt is not None else study.default_optimizer["kind"]
+    params = dict(opt.params) if opt is not None else dict(study.default_optimizer["params"])
+    algorithm = get_algorithm(kind, **params)
+    b = spec.budget
+    generations = b.generations
+    if generations is None and b.evaluations is None and b.wall_time_s is None:
+        generations = study.default_generations
+    termination = termination_from_budget(
+        n_gen=generations, n_evals=b.evaluations, seconds=b.wall_time_s
+    )
+    return Prepared(spec, study, robot, problem, algorithm, termination, generations)
+
+
+@dataclass(frozen=True, eq=False)
+class RunResult:
+    """The outcome of a job (JSON via :meth:`to_dict`; time series in ``best.motion``)."""
+
+    spec: JobSpec
+    status: str
+    best: Solution
+    pareto: list[dict[str, Any]]
+    baselines: dict[str, Solution]
+    history: list[dict[str, Any]]
+    extras: dict[str, Any]
+    optimizer: dict[str, Any]
+    objective_names: tuple[str, ...]
+    baseline_x: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """``result.json``: spec, status, best, pareto, baselines, history, extras, optimizer."""
+        return _jsonable(
+            {
+                "spec": self.spec.model_dump(mode="json"),
+                "status": self.status,
+                "objective_names": list(self.objective_names),
+                "best": self.best.summary(),
+                "pareto": self.pareto,
+                "baselines": {k: v.summary() for k, v in self.baselines.items()},
+                "history": self.history,
+                "extras": self.extras,
+                "optimizer": self.optimizer,
+            }
+        )
+
+
+def finalize(prepared: Prepared, result: Result) -> RunResult:
+    """Decode the optimum, the front and the baselines of a finished `Run`."""
+    problem = prepared.problem
+    best = problem.solution(np.asarray(result.x))
+    pareto = [
+        {"x": [float(v) for v in x], "objectives": [float(v) for v in f]}
+        for x, f in zip(result.front_X, result.front_F, strict=True)
+    ]
+    return RunResult(
+        spec=prepared.spec,
+        status="succeeded",
+        best=best,
+        pareto=pareto,
+        baselines=problem.baseline_solutions(),
+        history=[r.to_dict() for r in result.history],
+        extras=problem.extras(np.asarray(result.front_X), np.asarray(result.front_F)),
+        optimizer={
+            "kind": result.algorithm,
+            "params": result.params,
+            "n_gen": result.n_gen,
+            "n_evals": result.n_evals,
+            "elapsed_s": result.elapsed,
+            "reason": result.reason,
+            "feasible": result.feasible,
+        },
+        objective_names=problem.objective_names,
+    )
+
+
+def run(
+    spec: JobSpec | dict[str, Any],
+    *,
+    callback: Any = None,
+) -> RunResult:
+    """Run a job in-process. ``callback(progress: Progress) -> bool | None`` is called after each
+    generation; returning True stops the run early (its result is still decoded)."""
+    prepared = prepare(spec)
+    r = prepared.new_run()
+    while not r.done:
+        progress: Progress = r.step()
+        if callback is not None and callback(progress) is True:
+            r.stop("stopped by the callback")
+    return finalize(prepared, r.result())
+
+
+def _jsonable(obj: Any) -> Any:
+    """Strict-JSON-safe copy: numpy → python, NaN/inf → None, tuples → lists."""
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return _jsonable(obj.item())
+    if isinstance(obj, float):
+        return obj if np.isfinite(obj) else None
+    return obj
