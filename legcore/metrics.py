@@ -1,0 +1,279 @@
+"""Multi-objective metrics: non-dominated sorting, hypervolume, IGD and knee point.
+
+All objectives are minimised. ``F`` is always an ``(n, m)`` array of objective vectors.
+
+- ``non_dominated_sort`` ranks points into fronts (0 = non-dominated) with a vectorised dominance
+  matrix; with ``cv`` it applies Deb's constrained domination (feasible first, then by violation).
+- ``hypervolume`` is exact (pymoo's indicator, computed by moocore) and returns the value together
+  with the reference point it was measured against, so a number is never reported without it.
+- ``igd`` is the mean distance from each point of a reference front to its nearest point in ``F``.
+- ``knee_point`` is the point of a front farthest (on the ideal side) from the hyperplane through
+  the front's extreme points, in objectives normalised by the front's ideal and nadir.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.spatial.distance import cdist
+
+__all__ = [
+    "covers",
+    "dominance_matrix",
+    "non_dominated_sort",
+    "non_dominated_mask",
+    "fronts",
+    "crowding_distance",
+    "Hypervolume",
+    "hypervolume",
+    "reference_point",
+    "igd",
+    "knee_point",
+]
+
+# Elements of the temporaries built per block (about 32 MB of floats / 4 MB of booleans).
+_BLOCK_ELEMENTS = 4_000_000
+
+
+def _as_F(F: ArrayLike, name: str = "F") -> np.ndarray:
+    F = np.asarray(F, dtype=float)
+    if F.ndim != 2:
+        raise ValueError(f"{name}: expected a 2-D array (n, n_obj), got shape {F.shape}")
+    if np.any(np.isnan(F)):
+        raise ValueError(f"{name}: contains NaN")
+    return F
+
+
+def covers(A: ArrayLike, B: ArrayLike) -> np.ndarray:
+    """``C[i, j]`` is True when ``A[i] <= B[j]`` in every objective (weak dominance or equality).
+
+    Computed objective by objective over row blocks (``(len(A), len(B))`` booleans).
+    """
+    A, B = _as_F(A, "A"), _as_F(B, "B")
+    if A.shape[1] != B.shape[1]:
+        raise ValueError(f"A/B: different numbers of objectives ({A.shape[1]}, {B.shape[1]})")
+    na, nb = A.shape[0], B.shape[0]
+    out = np.empty((na, nb), dtype=bool)
+    if na == 0 or nb == 0:
+        return out
+    block = max(1, _BLOCK_ELEMENTS // nb)
+    for s in range(0, na, block):
+        rows, o = A[s:s + block], out[s:s + block]
+        np.less_equal(rows[:, 0, None], B[None, :, 0], out=o)
+        for k in range(1, A.shape[1]):
+            o &= rows[:, k, None] <= B[None, :, k]
+    return out
+
+
+def dominance_matrix(F: ArrayLike) -> np.ndarray:
+    """``D[i, j]`` is True when point ``i`` Pareto-dominates point ``j`` (minimisation).
+
+    ``i`` dominates ``j`` when ``F[i] <= F[j]`` in every objective and ``F[i] != F[j]``.
+    Memory: ``n^2`` booleans.
+    """
+    le = covers(F, F)
+    # all(Fi <= Fj) and not all(Fj <= Fi)  <=>  Fi <= Fj everywhere and Fi < Fj somewhere
+    return le & ~le.T
+
+
+def non_dominated_sort(F: ArrayLike, cv: ArrayLike | None = None) -> np.ndarray:
+    """Front index of every point (0 = non-dominated), Deb et al. 2002.
+
+    Args:
+        F: ``(n, m)`` objective values.
+        cv: optional ``(n,)`` constraint violations (``0`` = feasible). With it, feasible points
+            are ranked first by Pareto dominance; infeasible points follow, ranked by increasing
+            violation (equal violations share a front) — Deb's constrained domination.
+
+    Returns:
+        ``(n,)`` int64 ranks.
+    """
+    F = _as_F(F)
+    n = F.shape[0]
+    ranks = np.zeros(n, dtype=np.int64)
+    if n == 0:
+        return ranks
+    if cv is None:
+        feasible = np.ones(n, dtype=bool)
+    else:
+        cv = np.asarray(cv, dtype=float)
+        if cv.shape != (n,):
+            raise ValueError(f"cv: expected shape ({n},), got {cv.shape}")
+        feasible = cv <= 0.0
+    idx = np.flatnonzero(feasible)
+    n_fronts = 0
+    if idx.size:
+        D = dominance_matrix(F[idx])
+        count = D.sum(axis=0)  # number of points dominating each point
+        remaining = np.ones(idx.size, dtype=bool)
+        r = 0
+        while remaining.any():
+            front = remaining & (count == 0)
+            ranks[idx[front]] = r
+            remaining &= ~front
+            count = count - D[front].sum(axis=0)
+            r += 1
+        n_fronts = r
+    if cv is not None and not feasible.all():
+        inf_idx = np.flatnonzero(~feasible)
+        _, dense = np.unique(cv[inf_idx], return_inverse=True)
+        ranks[inf_idx] = n_fronts + dense
+    return ranks
+
+
+def non_dominated_mask(F: ArrayLike) -> np.ndarray:
+    """Boolean mask of the non-dominated points of ``F`` (duplicates are all kept)."""
+    F = _as_F(F)
+    if F.shape[0] == 0:
+        return np.zeros(0, dtype=bool)
+    return np.asarray(~dominance_matrix(F).any(axis=0))
+
+
+def fronts(ranks: ArrayLike) -> list[np.ndarray]:
+    """Indices of each front, in order, from the ranks of ``non_dominated_sort``."""
+    ranks = np.asarray(ranks)
+    if ranks.size == 0:
+        return []
+    order = np.argsort(ranks, kind="stable")
+    splits = np.flatnonzero(np.diff(ranks[order])) + 1
+    return np.split(order, splits)
+
+
+def crowding_distance(F: ArrayLike, ranks: ArrayLike | None = None) -> np.ndarray:
+    """NSGA-II crowding distance of every point within its front (Deb et al. 2002).
+
+    For each objective the points of a front are sorted; a point gets the normalised gap between
+    its two neighbours (objective range of its front), summed over objectives. The extremes of
+    every objective get ``inf``; so do fronts of one or two points.
+
+    Args:
+        F: ``(n, m)`` objective values.
+        ranks: front index per point (default: all in one front).
+
+    Returns:
+        ``(n,)`` float array.
+    """
+    F = _as_F(F)
+    n, m = F.shape
+    if ranks is None:
+        ranks = np.zeros(n, dtype=np.int64)
+    ranks = np.asarray(ranks)
+    if ranks.shape != (n,):
+        raise ValueError(f"ranks: expected shape ({n},), got {ranks.shape}")
+    cd = np.zeros(n)
+    if n == 0:
+        return cd
+    for k in range(m):
+        order = np.lexsort((F[:, k], ranks))
+        r, f = ranks[order], F[order, k]
+        first = np.r_[True, r[1:] != r[:-1]]
+        last = np.r_[r[1:] != r[:-1], True]
+        # objective range of each point's front
+        start = np.maximum.accumulate(np.where(first, np.arange(n), 0))
+        end_idx = np.where(last, np.arange(n), n)
+        end = np.minimum.accumulate(end_idx[::-1])[::-1]
+        span = f[end] - f[start]
+        prev = np.r_[f[0], f[:-1]]
+        nxt = np.r_[f[1:], f[-1]]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            gap = np.where(span > 0, (nxt - prev) / np.where(span > 0, span, 1.0), 0.0)
+        gap = np.where(first | last, np.inf, gap)
+        cd[order] += gap
+    return cd
+
+
+@dataclass(frozen=True)
+class Hypervolume:
+    """A hypervolume value together with the reference point it was measured against."""
+
+    value: float
+    ref_point: tuple[float, ...]
+    n_points: int
+
+    def __float__(self) -> float:
+        return self.value
+
+
+def reference_point(F: ArrayLike, margin: float = 0.1) -> np.ndarray:
+    """A reference point ``nadir + margin * (nadir - ideal)`` of ``F`` (fixed once per study)."""
+    F = _as_F(F)
+    if F.shape[0] == 0:
+        raise ValueError("F: cannot derive a reference point from an empty set")
+    ideal, nadir = F.min(axis=0), F.max(axis=0)
+    span = np.where(nadir > ideal, nadir - ideal, 1.0)
+    return nadir + margin * span
+
+
+def hypervolume(F: ArrayLike, ref_point: ArrayLike) -> Hypervolume:
+    """Exact hypervolume dominated by ``F`` and bounded by ``ref_point`` (minimisation).
+
+    Points that do not strictly dominate ``ref_point`` contribute nothing. Compare runs only
+    with the same reference point; it is recorded in the result.
+    """
+    from pymoo.indicators.hv import HV  # heavy import, only where needed
+
+    F = _as_F(F)
+    ref = np.asarray(ref_point, dtype=float).ravel()
+    if ref.shape != (F.shape[1],):
+        raise ValueError(f"ref_point: expected {F.shape[1]} coordinates, got {ref.shape[0]}")
+    if not np.all(np.isfinite(ref)):
+        raise ValueError("ref_point: must be finite")
+    inside = np.all(F < ref, axis=1)
+    value = float(HV(ref_point=ref).do(F[inside])) if inside.any() else 0.0
+    return Hypervolume(value=value, ref_point=tuple(float(r) for r in ref),
+                       n_points=int(inside.sum()))
+
+
+def igd(F: ArrayLike, reference_front: ArrayLike) -> float:
+    """Inverted generational distance: mean over the reference front of the distance to ``F``."""
+    F = _as_F(F)
+    R = _as_F(reference_front, "reference_front")
+    if F.shape[1] != R.shape[1]:
+        raise ValueError(f"reference_front: {R.shape[1]} objectives, F has {F.shape[1]}")
+    if F.shape[0] == 0 or R.shape[0] == 0:
+        raise ValueError("F/reference_front: both must be non-empty")
+    d = np.empty(R.shape[0])
+    block = max(1, _BLOCK_ELEMENTS // F.shape[0])
+    for s in range(0, R.shape[0], block):
+        d[s:s + block] = cdist(R[s:s + block], F).min(axis=1)
+    return float(d.mean())
+
+
+def knee_point(F: ArrayLike) -> int:
+    """Index of the knee of a front: max distance to the hyperplane through its extremes.
+
+    Objectives are normalised to ``[0, 1]`` by the front's ideal and nadir. The extreme points are
+    the minimisers of each objective (ties broken by the smallest normalised sum). The knee is the
+    point with the largest signed distance from the hyperplane through them, on the ideal side
+    (for two objectives: the line through the two end points of the front). When the extremes do
+    not span a hyperplane (fewer than ``m`` distinct extremes, or a plane through the ideal), the
+    knee falls back to the point closest to the ideal point in the normalised space.
+
+    Dominated points in ``F`` are allowed but the result is only meaningful for a front.
+    """
+    F = _as_F(F)
+    n, m = F.shape
+    if n == 0:
+        raise ValueError("F: cannot take the knee of an empty set")
+    if n == 1:
+        return 0
+    ideal, nadir = F.min(axis=0), F.max(axis=0)
+    span = np.where(nadir > ideal, nadir - ideal, 1.0)
+    Z = (F - ideal) / span
+    total = Z.sum(axis=1)
+    extremes = np.array([np.lexsort((total, Z[:, k]))[0] for k in range(m)])
+    fallback = int(np.argmin(np.linalg.norm(Z, axis=1)))
+    if np.unique(extremes).size < m:
+        return fallback
+    E = Z[extremes]
+    try:
+        normal = np.linalg.solve(E, np.ones(m))  # plane: normal . z = 1
+    except np.linalg.LinAlgError:
+        return fallback
+    norm = float(np.linalg.norm(normal))
+    if not np.isfinite(norm) or norm == 0.0 or np.any(normal <= 0):
+        return fallback
+    dist = (1.0 - Z @ normal) / norm  # > 0 on the ideal side
+    return int(np.argmax(dist))
