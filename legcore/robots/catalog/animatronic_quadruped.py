@@ -144,6 +144,7 @@ def leg_spec(front: bool) -> DHRobotSpec:
         name="animatronic_quadruped_" + ("front_leg" if front else "rear_leg"),
         joints=joints,
         ik="leg2",
+        gravity=[9.81, 0.0, 0.0],  # the leg base frame has x pointing down
         home=[float(v) for v in q_home],
         description=(
             "2-DOF leg of the seed 003 quadruped (l = 0.085, 0.0925 m), base frame x down, "
