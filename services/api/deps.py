@@ -1,0 +1,187 @@
+"""Dependencies of the routes: the app context (settings, database, artifacts, queue), the
+caller's API key, and pagination parameters.
+
+The database engine is created lazily on first use (importing the app or building it never
+touches the database); ``ApiContext.read()`` / ``write()`` are transactions: ``write()`` takes
+the SQLite write lock at ``BEGIN`` (see ``services.store.session``) and commits when its block
+ends, so a route enqueues only after the block, i.e. after the commit.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Annotated
+
+from fastapi import Depends, HTTPException, Query, Request, Security, status
+from fastapi.security import APIKeyHeader
+from sqlalchemy import Engine
+from sqlalchemy.orm import Session, sessionmaker
+
+from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT
+from services.store.artifacts import ArtifactStore
+from services.store.keys import hash_api_key
+from services.store.lifecycle import request_cancel
+from services.store.records import ApiKeyRecord
+from services.store.repository import get_api_key_by_hash
+from services.store.session import engine_from_settings, make_session_factory, session_scope
+from services.store.settings import Settings
+
+log = logging.getLogger("legopt.api")
+
+Enqueue = Callable[[str], None]
+
+#: Largest offset / generation cursor accepted (keeps SQL integers in range).
+MAX_OFFSET = 1_000_000_000
+
+API_KEY_HEADER = "X-API-Key"
+
+
+def default_enqueue(job_id: str) -> None:
+    """Send the job to the Celery workers (imported lazily: the API does not need Celery
+    until it enqueues)."""
+    from services.worker.tasks import enqueue
+
+    enqueue(job_id)
+
+
+@dataclass
+class ApiContext:
+    """Everything the routes share: settings, the lazily-built database, artifacts, the queue
+    (``enqueue(job_id)``), the sweep size limit and the URL prefix of the API."""
+
+    settings: Settings
+    enqueue: Enqueue = default_enqueue
+    max_sweep_jobs: int = 1000
+    prefix: str = "/api/v1"
+    _engine: Engine | None = field(default=None, init=False, repr=False)
+    _factory: sessionmaker[Session] | None = field(default=None, init=False, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, init=False, repr=False)
+
+    @property
+    def session_factory(self) -> sessionmaker[Session]:
+        """Session factory over the settings' database (engine built on first use)."""
+        with self._lock:
+            if self._factory is None:
+                self._engine = engine_from_settings(self.settings)
+                self._factory = make_session_factory(self._engine)
+            return self._factory
+
+    @property
+    def artifacts(self) -> ArtifactStore:
+        """The artifact store of the settings."""
+        return ArtifactStore.from_settings(self.settings)
+
+    @contextmanager
+    def read(self) -> Iterator[Session]:
+        """A read transaction."""
+        with session_scope(self.session_factory) as session:
+            yield session
+
+    @contextmanager
+    def write(self) -> Iterator[Session]:
+        """A write transaction (committed when the block ends, rolled back if it raises)."""
+        with session_scope(self.session_factory, immediate=True) as session:
+            yield session
+
+    def send_jobs(self, job_ids: Sequence[str]) -> None:
+        """Enqueue committed jobs. If the queue fails, the jobs not sent are cancelled (they
+        would otherwise wait forever) and the request ends with a 503 saying so."""
+        for i, job_id in enumerate(job_ids):
+            try:
+                self.enqueue(job_id)
+            except Exception as exc:
+                log.exception("enqueue of job %s failed", job_id)
+                unsent = list(job_ids[i:])
+                with self.write() as session:
+                    for jid in unsent:
+                        request_cancel(session, jid)
+                raise HTTPException(
+                    status.HTTP_503_SERVICE_UNAVAILABLE,
+                    f"the job queue is unavailable ({type(exc).__name__}: {exc}); "
+                    f"{len(unsent)} job(s) could not be queued and were cancelled: "
+                    f"{', '.join(unsent[:10])}{' ...' if len(unsent) > 10 else ''}",
+                ) from None
+
+    def close(self) -> None:
+        """Dispose of the engine (app shutdown); a later use builds a new one."""
+        with self._lock:
+            if self._engine is not None:
+                self._engine.dispose()
+            self._engine = self._factory = None
+
+
+def get_context(request: Request) -> ApiContext:
+    """The context of the app serving ``request``."""
+    ctx: ApiContext = request.app.state.context
+    return ctx
+
+
+Context = Annotated[ApiContext, Depends(get_context)]
+
+_api_key = APIKeyHeader(
+    name=API_KEY_HEADER,
+    auto_error=False,
+    description="Your API key (`legopt keys create NAME` prints one).",
+)
+
+
+def current_key(
+    ctx: Context, raw_key: Annotated[str | None, Security(_api_key)] = None
+) -> ApiKeyRecord:
+    """The API key of the caller (looked up by its hash); 401 when missing or unknown."""
+    if not raw_key:
+        raise HTTPException(
+            status.HTTP_401_UNAUTHORIZED,
+            f"missing {API_KEY_HEADER} header",
+            headers={"WWW-Authenticate": API_KEY_HEADER},
+        )
+    with ctx.read() as session:
+        key = get_api_key_by_hash(session, hash_api_key(raw_key))
+    if key is None:
+        raise HTTPException(
+            status.HTTP_401_UNAUTHORIZED,
+            "invalid API key",
+            headers={"WWW-Authenticate": API_KEY_HEADER},
+        )
+    return key
+
+
+CurrentKey = Annotated[ApiKeyRecord, Depends(current_key)]
+
+
+@dataclass(frozen=True)
+class PageParams:
+    """``limit`` / ``offset`` of a listing."""
+
+    limit: int
+    offset: int
+
+
+def page_params(
+    limit: Annotated[int, Query(ge=1, le=MAX_LIMIT, description="Page size.")] = DEFAULT_LIMIT,
+    offset: Annotated[int, Query(ge=0, le=MAX_OFFSET, description="Items to skip.")] = 0,
+) -> PageParams:
+    """Pagination query parameters."""
+    return PageParams(limit=limit, offset=offset)
+
+
+Pagination = Annotated[PageParams, Depends(page_params)]
+
+__all__ = [
+    "API_KEY_HEADER",
+    "ApiContext",
+    "Context",
+    "CurrentKey",
+    "Enqueue",
+    "MAX_OFFSET",
+    "PageParams",
+    "Pagination",
+    "current_key",
+    "default_enqueue",
+    "get_context",
+    "page_params",
+]

@@ -1,0 +1,177 @@
+"""Error shapes of the API and the handlers that produce them.
+
+Two shapes only, both FastAPI's:
+
+- validation errors (422): ``{"detail": [{"loc": [...], "msg": "...", "type": "..."}]}``; the
+  location starts with ``"body"``, ``"query"`` or ``"path"`` and then names the field, e.g.
+  ``["body", "robot", "joints", 1, "inertia"]``;
+- every other error: ``{"detail": "message"}`` (401, 404, 409, 413, 503, 500).
+
+legcore reports a bad spec either as a pydantic ``ValidationError`` or as a ``ValueError`` whose
+message starts with the field (``"urdf: not well-formed XML"``); :func:`from_pydantic` and
+:func:`from_value_error` turn both into a ``RequestValidationError`` with a proper ``loc``.
+Store errors map to statuses in :func:`install_error_handlers`; anything unexpected becomes a
+logged 500 with a short message (user input never gets there: it is validated first).
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+from fastapi import FastAPI, HTTPException, Request, status
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from pydantic import ValidationError
+
+from services.store.errors import (
+    ArtifactError,
+    ConflictError,
+    NotFoundError,
+)
+
+log = logging.getLogger("legopt.api")
+
+Loc = tuple[str | int, ...]
+
+#: How many errors one response lists at most (a sweep of 1000 bad jobs stays readable).
+MAX_ERRORS = 20
+
+# "field.path: reason" at the start of a legcore message (no spaces in the field path).
+_FIELD_MESSAGE = re.compile(r"^(?P<field>[A-Za-z_][\w-]*(?:\.[\w-]+)*): (?P<reason>.+)$", re.S)
+_VALUE_ERROR_PREFIX = "Value error, "
+
+
+def loc_parts(dotted: str) -> Loc:
+    """``"joints.1.inertia"`` -> ``("joints", 1, "inertia")`` (digit segments become ints)."""
+    return tuple(int(p) if p.isdigit() else p for p in dotted.split(".") if p)
+
+
+def split_field_message(message: str) -> tuple[Loc, str]:
+    """Split ``"field.path: reason"`` into ``(("field", "path"), "reason")``.
+
+    A message that does not start with a field path comes back as ``((), message)``.
+    """
+    m = _FIELD_MESSAGE.match(message.strip())
+    if m is None:
+        return (), message
+    return loc_parts(m.group("field")), m.group("reason")
+
+
+def field_error(loc: Sequence[str | int], msg: str, type_: str = "value_error") -> dict[str, Any]:
+    """One validation error entry."""
+    return {"type": type_, "loc": list(loc), "msg": msg}
+
+
+def validation_error(errors: Iterable[dict[str, Any]]) -> RequestValidationError:
+    """A 422 carrying ``errors`` (at most ``MAX_ERRORS``)."""
+    return RequestValidationError(list(errors)[:MAX_ERRORS])
+
+
+def invalid(
+    loc: Sequence[str | int], msg: str, type_: str = "value_error"
+) -> RequestValidationError:
+    """A 422 with one error at ``loc``."""
+    return validation_error([field_error(loc, msg, type_)])
+
+
+def _is_internal_loc_part(part: str | int) -> bool:
+    """Pydantic's names of union members in a location (``tagged-union[...]``, ``str``...)."""
+    return isinstance(part, str) and ("[" in part or part in {"str", "int", "float", "bool"})
+
+
+def clean_pydantic_errors(exc: ValidationError, prefix: Loc = ()) -> list[dict[str, Any]]:
+    """The errors of ``exc`` as plain JSON entries located under ``prefix``.
+
+    Locations drop pydantic's internal union member names, and a ``value_error`` whose message
+    starts with a field path (``"params.pop_size: must be >= 2"``) gets that path appended to its
+    location. Inputs and contexts are left out (they may be large or not JSON).
+    """
+    out: list[dict[str, Any]] = []
+    for err in exc.errors(include_url=False, include_context=False, include_input=False):
+        loc: Loc = tuple(p for p in err["loc"] if not _is_internal_loc_part(p))
+        msg = str(err["msg"])
+        if err["type"] == "value_error" and msg.startswith(_VALUE_ERROR_PREFIX):
+            msg = msg[len(_VALUE_ERROR_PREFIX) :]
+            sub, reason = split_field_message(msg)
+            if sub:
+                loc, msg = loc + sub, reason
+        out.append(field_error(prefix + loc, msg, str(err["type"])))
+    return out
+
+
+def from_pydantic(exc: ValidationError, prefix: Loc = ()) -> RequestValidationError:
+    """A 422 from a pydantic ``ValidationError`` raised while validating the field ``prefix``."""
+    return validation_error(clean_pydantic_errors(exc, prefix))
+
+
+def from_value_error(
+    exc: BaseException, prefix: Loc = (), default_loc: Loc | None = None
+) -> RequestValidationError:
+    """A 422 from a legcore ``ValueError("field: reason")`` raised for the field ``prefix``.
+
+    Without a field in the message the error is located at ``default_loc`` (default: ``prefix``).
+    """
+    message = str(exc) or type(exc).__name__
+    sub, reason = split_field_message(message)
+    if not sub:
+        return invalid(prefix if default_loc is None else default_loc, message)
+    return invalid(prefix + sub, reason)
+
+
+# --------------------------------------------------------------------------- handlers
+
+
+def _detail(status_code: int, message: str) -> JSONResponse:
+    return JSONResponse(status_code=status_code, content={"detail": message})
+
+
+async def _not_found(_request: Request, exc: Exception) -> JSONResponse:
+    return _detail(status.HTTP_404_NOT_FOUND, str(exc) or "not found")
+
+
+async def _conflict(_request: Request, exc: Exception) -> JSONResponse:
+    return _detail(status.HTTP_409_CONFLICT, str(exc) or "conflict")
+
+
+async def _artifact(_request: Request, exc: Exception) -> JSONResponse:
+    log.error("artifact store error: %s", exc)
+    return _detail(status.HTTP_500_INTERNAL_SERVER_ERROR, f"artifact store error: {exc}")
+
+
+async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
+    log.exception("unhandled error on %s %s", request.method, request.url.path, exc_info=exc)
+    return _detail(
+        status.HTTP_500_INTERNAL_SERVER_ERROR,
+        "internal server error (logged); please report it with the time of the request",
+    )
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    """Map store errors to 404 / 409 / 500 and anything unexpected to a logged 500."""
+    app.add_exception_handler(NotFoundError, _not_found)
+    app.add_exception_handler(ConflictError, _conflict)
+    app.add_exception_handler(ArtifactError, _artifact)
+    app.add_exception_handler(Exception, _unexpected)
+
+
+def not_found(what: str, ident: str) -> HTTPException:
+    """The 404 of a missing resource (also for a resource of another API key)."""
+    return HTTPException(status.HTTP_404_NOT_FOUND, f"{what} {ident!r} not found")
+
+
+__all__ = [
+    "MAX_ERRORS",
+    "clean_pydantic_errors",
+    "field_error",
+    "from_pydantic",
+    "from_value_error",
+    "install_error_handlers",
+    "invalid",
+    "loc_parts",
+    "not_found",
+    "split_field_message",
+    "validation_error",
+]

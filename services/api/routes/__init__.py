@@ -1,0 +1,1 @@
+"""The routers of ``/api/v1``: robots (and the catalog), jobs, sweeps, health."""

@@ -1,0 +1,268 @@
+"""Jobs: submit (validated completely before anything is stored), list, read, outputs, cancel."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Body, HTTPException, Query, Response, status
+from fastapi.responses import FileResponse
+from sqlalchemy.orm import Session
+
+from services.api.deps import MAX_OFFSET, Context, CurrentKey, Pagination
+from services.api.errors import not_found
+from services.api.routes.robots import robot_lookup
+from services.api.schemas import (
+    MAX_LIMIT,
+    ErrorOut,
+    GenerationOut,
+    GenerationPage,
+    JobDetail,
+    JobOut,
+    JobSpecDoc,
+    Page,
+    ParetoPage,
+    ParetoPointOut,
+    ResultOut,
+    objective_names,
+)
+from services.api.validation import check_job_spec, example_specs
+from services.store import lifecycle
+from services.store import repository as repo
+from services.store.errors import ArtifactError
+from services.store.records import JobRecord
+from services.store.tables import JobStatus
+
+router = APIRouter(tags=["jobs"])
+
+_404: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorOut, "description": "No such job (among yours)."}
+}
+
+RECORDING = "recording"
+
+
+def owned_job(session: Session, job_id: str, owner_key_id: str) -> JobRecord:
+    """The caller's job ``job_id``; 404 when missing or another key's."""
+    job = repo.get_job(session, job_id, owner_key_id=owner_key_id)
+    if job is None:
+        raise not_found("job", job_id)
+    return job
+
+
+def _spec_examples() -> dict[str, dict[str, object]]:
+    examples: dict[str, dict[str, object]] = {
+        kind: {"summary": f"{kind} with the seed paper's defaults", "value": spec}
+        for kind, spec in example_specs().items()
+    }
+    return examples
+
+
+@router.post(
+    "/jobs",
+    status_code=status.HTTP_202_ACCEPTED,
+    response_model=JobDetail,
+    summary="Submit a job (the same spec document as `legopt run`)",
+    responses={503: {"model": ErrorOut, "description": "The job queue is unavailable."}},
+)
+def submit_job(
+    spec: Annotated[JobSpecDoc, Body(openapi_examples=_spec_examples())],
+    key: CurrentKey,
+    ctx: Context,
+    response: Response,
+) -> JobDetail:
+    """Validate the spec exactly as a worker will run it (robot, problem, optimizer, size
+    limits) — a rejected request stores nothing — then store the job and queue it.
+
+    ``robot`` may be a catalog name, the id or name of one of your stored robots (its spec is
+    substituted), or an inline robot spec.
+    """
+    with ctx.read() as session:
+        checked = check_job_spec(spec, settings=ctx.settings, lookup=robot_lookup(session, key.id))
+    with ctx.write() as session:
+        job = repo.create_job(
+            session,
+            owner_key_id=key.id,
+            spec=checked.spec,
+            total_generations=checked.total_generations,
+        )
+    ctx.send_jobs([job.id])
+    response.headers["Location"] = f"{ctx.prefix}/jobs/{job.id}"
+    return JobDetail.from_record(job)
+
+
+@router.get("/jobs", response_model=Page[JobOut], summary="List your jobs (newest first)")
+def list_jobs(
+    key: CurrentKey,
+    ctx: Context,
+    page: Pagination,
+    status_: Annotated[
+        list[JobStatus] | None, Query(alias="status", description="Only these statuses.")
+    ] = None,
+    sweep_id: Annotated[str | None, Query(description="Only the jobs of this sweep.")] = None,
+) -> Page[JobOut]:
+    """Your jobs, filtered by status (repeat the parameter for several) and sweep."""
+    with ctx.read() as session:
+        jobs = repo.list_jobs(
+            session,
+            owner_key_id=key.id,
+            status=status_ or None,
+            sweep_id=sweep_id,
+            limit=page.limit,
+            offset=page.offset,
+        )
+    return Page[JobOut](
+        items=[JobOut.from_record(j) for j in jobs.items],
+        total=jobs.total,
+        limit=jobs.limit,
+        offset=jobs.offset,
+    )
+
+
+@router.get("/jobs/{job_id}", response_model=JobDetail, summary="One job", responses=_404)
+def get_job(job_id: str, key: CurrentKey, ctx: Context) -> JobDetail:
+    """Status, progress (generation / total), best objective so far, attempts, error,
+    warnings, timestamps and the spec."""
+    with ctx.read() as session:
+        return JobDetail.from_record(owned_job(session, job_id, key.id))
+
+
+def _no_output(job: JobRecord, what: str) -> HTTPException:
+    message = f"job {job.id} has no {what}: it is {job.status.value}"
+    if job.status is JobStatus.FAILED and job.error_message:
+        message += f" ({job.error_message})"
+    elif not job.is_terminal:
+        message += "; it is written when the job succeeds"
+    return HTTPException(status.HTTP_404_NOT_FOUND, message)
+
+
+@router.get(
+    "/jobs/{job_id}/result",
+    response_model=ResultOut,
+    summary="Final result of a succeeded job",
+    responses=_404,
+)
+def get_result(job_id: str, key: CurrentKey, ctx: Context) -> ResultOut:
+    """Best solution (x, objectives, metrics, per-joint table), baselines, artifacts."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        result = repo.get_result(session, job.id)
+        if result is None:
+            raise _no_output(job, "result")
+        baselines = repo.list_baselines(session, job.id)
+        artifacts = repo.list_artifacts(session, job.id)
+    return ResultOut.from_records(result, baselines, artifacts)
+
+
+@router.get(
+    "/jobs/{job_id}/pareto",
+    response_model=ParetoPage,
+    summary="Final Pareto front (paginated; empty until the job succeeded)",
+    responses=_404,
+)
+def get_pareto(job_id: str, key: CurrentKey, ctx: Context, page: Pagination) -> ParetoPage:
+    """Points of the front by index: decision vector ``x`` and ``objectives``."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        points = repo.list_pareto(session, job.id)
+        names = objective_names(repo.get_result(session, job.id))
+    chosen = points[page.offset : page.offset + page.limit]
+    return ParetoPage(
+        items=[ParetoPointOut.from_record(p) for p in chosen],
+        total=len(points),
+        limit=page.limit,
+        offset=page.offset,
+        objective_names=names,
+    )
+
+
+@router.get(
+    "/jobs/{job_id}/generations",
+    response_model=GenerationPage,
+    summary="Per-generation progress (poll with `after`)",
+    responses=_404,
+)
+def get_generations(
+    job_id: str,
+    key: CurrentKey,
+    ctx: Context,
+    after: Annotated[
+        int | None, Query(ge=-1, le=MAX_OFFSET, description="Only generations after this one.")
+    ] = None,
+    limit: Annotated[int, Query(ge=1, le=MAX_LIMIT)] = MAX_LIMIT,
+) -> GenerationPage:
+    """Generation rows in order (0 is the initial population)."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        rows = repo.list_generations(session, job.id, after=after, limit=limit)
+    return GenerationPage(
+        items=[GenerationOut.from_record(g) for g in rows],
+        limit=limit,
+        after=after,
+        next_after=rows[-1].generation if rows else after,
+    )
+
+
+@router.get(
+    "/jobs/{job_id}/recording",
+    response_class=FileResponse,
+    summary="The Rerun recording (.rrd) of a succeeded job",
+    responses={
+        200: {"content": {"application/octet-stream": {}}, "description": "The .rrd file."},
+        **_404,
+    },
+)
+def get_recording(job_id: str, key: CurrentKey, ctx: Context) -> FileResponse:
+    """The ``.rrd`` file, checked against its recorded SHA-256 first. Open it with
+    ``rerun FILE.rrd`` (or ``legopt replay JOB``)."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        artifact = repo.get_artifact(session, job.id, RECORDING)
+    if artifact is None:
+        spec = job.spec if isinstance(job.spec, dict) else {}
+        if spec.get("record") is False:
+            raise HTTPException(
+                status.HTTP_404_NOT_FOUND,
+                f"job {job.id} has no recording: recording is disabled in its spec (record: false)",
+            )
+        if job.status is JobStatus.SUCCEEDED:
+            why = "; ".join(w for w in job.warnings if "record" in w) or "none was written"
+            raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no recording: {why}")
+        raise _no_output(job, "recording")
+    store = ctx.artifacts
+    try:
+        store.verify(artifact.relative_path, artifact.sha256)
+        path = store.path(artifact.relative_path)
+    except FileNotFoundError:
+        raise ArtifactError(
+            f"the recording of job {job.id} is missing from the artifact store"
+        ) from None
+    return FileResponse(
+        path,
+        media_type="application/octet-stream",
+        filename=f"{job.id}.rrd",
+        headers={"X-Checksum-SHA256": artifact.sha256},
+    )
+
+
+@router.post(
+    "/jobs/{job_id}/cancel",
+    status_code=status.HTTP_202_ACCEPTED,
+    response_model=JobOut,
+    summary="Cancel a job",
+    responses={
+        **_404,
+        409: {"model": ErrorOut, "description": "The job already finished."},
+    },
+)
+def cancel_job(job_id: str, key: CurrentKey, ctx: Context) -> JobOut:
+    """A queued job is cancelled at once; a running job is flagged and its worker stops after
+    the current generation (``cancel_requested``); a finished job is a 409."""
+    with ctx.write() as session:
+        job = owned_job(session, job_id, key.id)
+        if job.is_terminal:
+            raise HTTPException(
+                status.HTTP_409_CONFLICT, f"job {job.id} already finished: it is {job.status.value}"
+            )
+        updated = lifecycle.request_cancel(session, job.id, owner_key_id=key.id)
+    assert updated is not None
+    return JobOut.from_record(updated)

@@ -1,0 +1,210 @@
+"""Robot models: store (validated and built), list, read, validate; the seed catalog."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query, Response, status
+from sqlalchemy.orm import Session
+
+from legcore.robots import LeggedRobot, Robot, build_robot, catalog
+from services.api.deps import Context, CurrentKey, Pagination
+from services.api.errors import invalid, not_found
+from services.api.schemas import (
+    CatalogEntry,
+    ErrorOut,
+    Page,
+    RobotCreate,
+    RobotDetail,
+    RobotOut,
+    RobotSummaryOut,
+    RobotValidate,
+    RobotValidation,
+)
+from services.api.validation import (
+    RobotLookup,
+    build_inline_robot,
+    catalog_robot,
+    summarize_robot,
+)
+from services.store import repository as repo
+from services.store.records import RobotRecord
+
+router = APIRouter(tags=["robots"])
+
+_404: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorOut, "description": "No such robot (among yours)."}
+}
+
+
+def validated_robot(
+    body: RobotValidate,
+) -> tuple[str, dict[str, Any], Robot | LeggedRobot]:
+    """``(source, stored spec, built model)`` of a robot request; 422 naming the field."""
+    if body.catalog is not None:
+        robot = catalog_robot(body.catalog, ("body", "catalog"))
+        return "catalog", {"catalog": body.catalog}, robot
+    doc, built = build_inline_robot(body.spec, ("body", "spec"))
+    return str(doc["kind"]), doc, built
+
+
+def robot_lookup(session: Session, owner_key_id: str) -> RobotLookup:
+    """Resolve a job's ``robot`` reference among the caller's stored robots (id, then name)
+    into the document it stands for: a catalog name or an inline spec."""
+
+    def lookup(reference: str) -> str | dict[str, Any] | None:
+        record = repo.get_robot(session, reference, owner_key_id=owner_key_id)
+        if record is None:
+            record = repo.get_robot_by_name(session, owner_key_id=owner_key_id, name=reference)
+        if record is None:
+            return None
+        spec = record.spec
+        if isinstance(spec, dict) and "catalog" in spec:
+            return str(spec["catalog"])
+        return dict(spec) if isinstance(spec, dict) else None
+
+    return lookup
+
+
+def _out(record: RobotRecord) -> RobotOut:
+    spec = record.spec if isinstance(record.spec, dict) else {}
+    return RobotOut(
+        id=record.id,
+        name=record.name,
+        source=record.source_kind.value,
+        catalog=spec.get("catalog"),
+        created_at=record.created_at,
+    )
+
+
+def _detail(record: RobotRecord, robot: Robot | LeggedRobot | None = None) -> RobotDetail:
+    if robot is None:
+        spec = record.spec
+        robot = catalog.get(spec["catalog"]) if "catalog" in spec else build_robot(spec)
+    return RobotDetail(
+        **_out(record).model_dump(),
+        spec=record.spec,
+        inline_spec=_inline_spec(robot),
+        summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
+    )
+
+
+def _catalog_out(name: str) -> RobotOut:
+    return RobotOut(id=name, name=name, source="catalog", catalog=name, builtin=True)
+
+
+def _inline_spec(robot: Robot | LeggedRobot) -> dict[str, Any] | None:
+    """The spec a serial robot was built from, as JSON (None for a legged robot)."""
+    return robot.spec.model_dump(mode="json") if isinstance(robot, Robot) else None
+
+
+def _catalog_detail(name: str) -> RobotDetail:
+    robot = catalog.get(name)
+    return RobotDetail(
+        **_catalog_out(name).model_dump(),
+        spec={"catalog": name},
+        inline_spec=_inline_spec(robot),
+        summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
+    )
+
+
+@router.post(
+    "/robots",
+    status_code=status.HTTP_201_CREATED,
+    response_model=RobotDetail,
+    summary="Store a robot model (validated and built first)",
+    responses={409: {"model": ErrorOut, "description": "You already have a robot of this name."}},
+)
+def create_robot(
+    body: RobotCreate, key: CurrentKey, ctx: Context, response: Response
+) -> RobotDetail:
+    """Validate and build the model (a non-physical model is a 422 naming the field), then
+    store it. Job specs can then use its id (or name) as ``robot``."""
+    if body.name in catalog.names():
+        raise invalid(("body", "name"), f"{body.name!r} is a catalog robot's name; choose another")
+    source, spec, robot = validated_robot(body)
+    with ctx.write() as session:
+        record = repo.create_robot(
+            session, owner_key_id=key.id, name=body.name, source_kind=source, spec=spec
+        )
+    response.headers["Location"] = f"{ctx.prefix}/robots/{record.id}"
+    return _detail(record, robot)
+
+
+@router.post(
+    "/robots/validate",
+    response_model=RobotValidation,
+    summary="Validate and build a robot model without storing it",
+)
+def validate_robot(body: RobotValidate, key: CurrentKey) -> RobotValidation:
+    """200 with a summary of the built model, or 422 naming the offending field."""
+    source, _spec, robot = validated_robot(body)
+    return RobotValidation(
+        source=source,  # type: ignore[arg-type]
+        summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
+    )
+
+
+@router.get("/robots", response_model=Page[RobotOut], summary="List your robots")
+def list_robots(
+    key: CurrentKey,
+    ctx: Context,
+    page: Pagination,
+    include_catalog: Annotated[
+        bool, Query(description="List the catalog robots first (their id is their name).")
+    ] = False,
+) -> Page[RobotOut]:
+    """Your stored robots by name; with ``include_catalog`` the catalog entries come first."""
+    builtin = [_catalog_out(n) for n in catalog.names()] if include_catalog else []
+    items = builtin[page.offset : page.offset + page.limit]
+    stored_offset = max(0, page.offset - len(builtin))
+    stored_limit = page.limit - len(items)
+    with ctx.read() as session:
+        stored = repo.list_robots(
+            session, owner_key_id=key.id, limit=max(1, stored_limit), offset=stored_offset
+        )
+    if stored_limit > 0:
+        items += [_out(r) for r in stored.items]
+    return Page[RobotOut](
+        items=items, total=len(builtin) + stored.total, limit=page.limit, offset=page.offset
+    )
+
+
+@router.get(
+    "/robots/{robot_id}",
+    response_model=RobotDetail,
+    summary="One robot (yours, or a catalog name) with its spec and model summary",
+    responses=_404,
+)
+def get_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotDetail:
+    """Your robot ``robot_id``, or the catalog robot of that name."""
+    if robot_id in catalog.names():
+        return _catalog_detail(robot_id)
+    with ctx.read() as session:
+        record = repo.get_robot(session, robot_id, owner_key_id=key.id)
+    if record is None:
+        raise not_found("robot", robot_id)
+    return _detail(record)
+
+
+@router.get(
+    "/catalog",
+    response_model=list[CatalogEntry],
+    summary="The catalog of the seed papers' robots",
+)
+def list_catalog(key: CurrentKey) -> list[CatalogEntry]:
+    """Every catalog robot with its DOF and provenance (seed paper, tables, assumed values)."""
+    out = []
+    for name in catalog.names():
+        s = summarize_robot(catalog.get(name))
+        out.append(
+            CatalogEntry(
+                name=name,
+                kind=s.kind,  # type: ignore[arg-type]
+                nq=s.nq,
+                n_legs=s.n_legs,
+                joint_names=list(s.joint_names),
+                source=catalog.source(name),
+            )
+        )
+    return out

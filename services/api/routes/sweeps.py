@@ -1,0 +1,206 @@
+"""Sweeps: one base spec fanned out over a grid, a list and seeds; the aggregated table."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter, Response, status
+from fastapi.exceptions import RequestValidationError
+
+from services.api.deps import Context, CurrentKey, Pagination
+from services.api.errors import MAX_ERRORS, invalid, not_found, validation_error
+from services.api.routes.robots import robot_lookup
+from services.api.schemas import (
+    ErrorOut,
+    Page,
+    SweepCreate,
+    SweepCreated,
+    SweepOut,
+    SweepRow,
+    SweepSummary,
+    objective_names,
+)
+from services.api.sweeps import SweepError, SweepPoint, expand, get_path, swept_paths
+from services.api.validation import CheckedJob, check_job_spec, resolve_robot
+from services.store import repository as repo
+from services.store.records import JobRecord
+from services.store.tables import JobStatus
+
+router = APIRouter(tags=["sweeps"])
+
+_404: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorOut, "description": "No such sweep (among yours)."}
+}
+_BASE = ("body", "base")
+
+
+def _relocate(errors: list[dict[str, Any]], point: SweepPoint) -> list[dict[str, Any]]:
+    """Errors of a generated spec (located under ``body.base``), moved to the override that
+    caused them (``body.grid.<path>.<i>``, ``body.list.<k>.<path>``, ``body.seeds.<j>``)."""
+    out = []
+    for err in errors:
+        field = err["loc"][len(_BASE) :] if err["loc"][: len(_BASE)] == list(_BASE) else None
+        source = point.source_of(field) if field is not None else None
+        if source is None:
+            out.append(err)
+            continue
+        where = ".".join(str(p) for p in field) if field else "spec"
+        overrides = ", ".join(f"{k}={v!r}" for k, v in point.overrides.items())
+        out.append(
+            {
+                **err,
+                "loc": ["body", *source],
+                "msg": f"job {point.index} ({overrides}): {where}: {err['msg']}",
+            }
+        )
+    return out
+
+
+@router.post(
+    "/sweeps",
+    status_code=status.HTTP_202_ACCEPTED,
+    response_model=SweepCreated,
+    summary="Create a sweep: one job per grid point × list entry × seed",
+    responses={503: {"model": ErrorOut, "description": "The job queue is unavailable."}},
+)
+def create_sweep(
+    body: SweepCreate, key: CurrentKey, ctx: Context, response: Response
+) -> SweepCreated:
+    """Expand the sweep, validate EVERY generated spec (nothing is stored if one fails), store
+    the sweep and its jobs in one transaction, then queue them."""
+    checked: list[CheckedJob] = []
+    with ctx.read() as session:
+        lookup = robot_lookup(session, key.id)
+        base = resolve_robot(body.base, lookup, _BASE)
+        try:
+            points = expand(base, body.grid, body.entries, body.seeds, max_jobs=ctx.max_sweep_jobs)
+        except SweepError as exc:
+            raise invalid(("body", *exc.loc), exc.message) from None
+        errors: list[dict[str, Any]] = []
+        seen: set[tuple[str, str]] = set()
+        cache: dict[str, Any] = {}
+        for point in points:
+            try:
+                checked.append(
+                    check_job_spec(
+                        point.spec, settings=ctx.settings, lookup=lookup, prefix=_BASE, cache=cache
+                    )
+                )
+            except RequestValidationError as exc:
+                for err in _relocate(list(exc.errors()), point):
+                    ident = (repr(err["loc"]), err["msg"])
+                    if ident not in seen:
+                        seen.add(ident)
+                        errors.append(err)
+                if len(errors) >= MAX_ERRORS:
+                    break
+        if errors:
+            raise validation_error(errors)
+    axes = {"grid": body.grid, "list": body.entries, "seeds": body.seeds, "n_jobs": len(points)}
+    with ctx.write() as session:
+        sweep = repo.create_sweep(session, owner_key_id=key.id, base_spec=body.base, axes=axes)
+        jobs = [
+            repo.create_job(
+                session,
+                owner_key_id=key.id,
+                spec=c.spec,
+                total_generations=c.total_generations,
+                sweep_id=sweep.id,
+            )
+            for c in checked
+        ]
+    job_ids = [j.id for j in jobs]
+    ctx.send_jobs(job_ids)
+    response.headers["Location"] = f"{ctx.prefix}/sweeps/{sweep.id}"
+    counts = {s: 0 for s in JobStatus}
+    counts[JobStatus.QUEUED] = len(jobs)
+    return SweepCreated(**SweepSummary.from_record(sweep, counts).model_dump(), job_ids=job_ids)
+
+
+@router.get("/sweeps", response_model=Page[SweepSummary], summary="List your sweeps (newest first)")
+def list_sweeps(key: CurrentKey, ctx: Context, page: Pagination) -> Page[SweepSummary]:
+    """Your sweeps with their job counts per status."""
+    with ctx.read() as session:
+        sweeps = repo.list_sweeps(
+            session, owner_key_id=key.id, limit=page.limit, offset=page.offset
+        )
+        items = [
+            SweepSummary.from_record(
+                s, repo.count_jobs_by_status(session, owner_key_id=key.id, sweep_id=s.id)
+            )
+            for s in sweeps.items
+        ]
+    return Page[SweepSummary](items=items, total=sweeps.total, limit=page.limit, offset=page.offset)
+
+
+def _jobs_in_order(
+    session: Any, owner_key_id: str, sweep_id: str, total: int, limit: int, offset: int
+) -> list[JobRecord]:
+    """Jobs ``offset .. offset+limit`` of a sweep in creation order (the store lists newest
+    first, so the window is taken from the other end and reversed)."""
+    n = min(limit, total - offset)
+    if n <= 0:
+        return []
+    page = repo.list_jobs(
+        session,
+        owner_key_id=owner_key_id,
+        sweep_id=sweep_id,
+        limit=n,
+        offset=total - offset - n,
+    )
+    return list(reversed(page.items))
+
+
+@router.get(
+    "/sweeps/{sweep_id}",
+    response_model=SweepOut,
+    summary="A sweep: counts per status and the table of its jobs",
+    responses=_404,
+)
+def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) -> SweepOut:
+    """One row per job (paginated, in sweep order): the value of every swept path, status,
+    best objective so far, and the final objectives and key metrics of succeeded jobs."""
+    with ctx.read() as session:
+        sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
+        if sweep is None:
+            raise not_found("sweep", sweep_id)
+        counts = repo.count_jobs_by_status(session, owner_key_id=key.id, sweep_id=sweep.id)
+        total = sum(counts.values())
+        jobs = _jobs_in_order(session, key.id, sweep.id, total, page.limit, page.offset)
+        results = {
+            j.id: repo.get_result(session, j.id) for j in jobs if j.status is JobStatus.SUCCEEDED
+        }
+    axes = sweep.axes if isinstance(sweep.axes, dict) else {}
+    columns = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
+    names: list[str] = []
+    rows = []
+    for job in jobs:
+        result = results.get(job.id)
+        objectives = metrics = None
+        if result is not None:
+            names = names or objective_names(result)
+            objectives = result.objectives
+            if isinstance(objectives, dict) and "values" in objectives:
+                objectives = objectives["values"]
+            metrics = result.metrics
+        rows.append(
+            SweepRow(
+                job_id=job.id,
+                status=job.status,
+                overrides={path: get_path(job.spec, path) for path in columns},
+                progress=job.progress,
+                best_objective=job.best_objective,
+                objectives=objectives,
+                metrics=metrics,
+                error=job.error_message,
+            )
+        )
+    summary = SweepSummary.from_record(sweep, counts)
+    return SweepOut(
+        **summary.model_dump(),
+        base=sweep.base_spec,
+        axes=axes,
+        columns=columns,
+        objective_names=names,
+        table=Page[SweepRow](items=rows, total=total, limit=page.limit, offset=page.offset),
+    )

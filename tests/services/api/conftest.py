@@ -1,0 +1,70 @@
+"""Fixtures of the API tests: a migrated temporary SQLite database and artifact directory per
+test, an app whose ``enqueue`` records job ids, and two API keys."""
+
+from __future__ import annotations
+
+import shutil
+import sqlite3
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from api_helpers import new_key
+from fastapi.testclient import TestClient
+
+from services.api.app import create_app
+from services.api.deps import ApiContext
+from services.store import migrate
+from services.store.settings import Settings
+
+DB_NAME = "legopt.db"
+
+
+@pytest.fixture(scope="session")
+def migrated_template(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A SQLite file migrated to head once per run (copied for each test)."""
+    path = tmp_path_factory.mktemp("template") / DB_NAME
+    migrate.upgrade(f"sqlite:///{path.as_posix()}")
+    with sqlite3.connect(path) as conn:  # fold the WAL into the main file before copying
+        conn.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    return path
+
+
+@pytest.fixture
+def settings(tmp_path: Path, migrated_template: Path) -> Settings:
+    """Settings on a fresh migrated database and an empty artifact directory."""
+    shutil.copy(migrated_template, tmp_path / DB_NAME)
+    return Settings.from_env(env={}, data_dir=tmp_path)
+
+
+@pytest.fixture
+def sent() -> list[str]:
+    """Job ids the app enqueued, in order."""
+    return []
+
+
+@pytest.fixture
+def client(settings: Settings, sent: list[str]) -> Iterator[TestClient]:
+    """A test client of an app recording its enqueues in ``sent``."""
+    app = create_app(settings, enqueue=sent.append)
+    with TestClient(app) as c:
+        yield c
+
+
+@pytest.fixture
+def ctx(client: TestClient) -> ApiContext:
+    """The app's context (database sessions and artifact store for direct store calls)."""
+    context: ApiContext = client.app.state.context  # type: ignore[attr-defined]
+    return context
+
+
+@pytest.fixture
+def alice(ctx: ApiContext) -> dict[str, str]:
+    """Headers of a first API key."""
+    return {"X-API-Key": new_key(ctx, "alice")[0]}
+
+
+@pytest.fixture
+def bob(ctx: ApiContext) -> dict[str, str]:
+    """Headers of a second API key."""
+    return {"X-API-Key": new_key(ctx, "bob")[0]}
