@@ -12,12 +12,13 @@ Unknown keys are rejected everywhere; every error names its field (``problem.obs
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, model_validator
 
 from legcore.optimizers import get_algorithm
 from legcore.problems.registry import studies
+from legcore.problems.study import StudyParams
 from legcore.robots.spec import RobotSpec
 
 __all__ = ["Budget", "JobSpec", "OptimizerSpec", "parse_job_spec", "ProblemSpec"]
@@ -67,7 +68,10 @@ class JobSpec(_Strict):
 
     name: str | None = Field(default=None, max_length=200)
     robot: str | RobotSpec | None = None
-    problem: ProblemSpec  # type: ignore[valid-type]
+    if TYPE_CHECKING:
+        problem: StudyParams
+    else:
+        problem: ProblemSpec
     optimizer: OptimizerSpec | None = None
     seed: int = Field(default=0, ge=0, le=2**32 - 1)
     budget: Budget = Field(default_factory=Budget)

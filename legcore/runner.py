@@ -20,7 +20,7 @@ from legcore.problems.registry import get_study
 from legcore.problems.study import Solution, Study, StudyProblem
 from legcore.robots import LeggedRobot, Robot, build_robot, catalog
 
-__all__ = ["Prepared", "RunResult", "finalize", "prepare", "resolve_robot", "run"]
+__all__ = ["JobSize", "Prepared", "RunResult", "finalize", "job_size", "prepare", "resolve_robot", "run"]
 
 
 def resolve_robot(spec: JobSpec, study: Study) -> Robot | LeggedRobot:
@@ -81,6 +81,32 @@ def prepare(spec: JobSpec | dict[str, Any]) -> Prepared:
         n_gen=generations, n_evals=b.evaluations, seconds=b.wall_time_s
     )
     return Prepared(spec, study, robot, problem, algorithm, termination, generations)
+
+
+@dataclass(frozen=True)
+class JobSize:
+    """The work a job asks for: population per generation, generations, samples per evaluation."""
+
+    population: int
+    generations: int
+    samples: int
+
+    @property
+    def work(self) -> int:
+        return self.population * self.generations * self.samples
+
+
+def job_size(prepared: Prepared) -> JobSize:
+    """Estimate the size of a prepared job (for the service's per-job limits)."""
+    params = prepared.algorithm.params
+    population = next(
+        (int(params[k]) for k in ("pop_size", "n_samples", "n_subproblems") if k in params), 1
+    )
+    generations = prepared.total_generations
+    if generations is None:
+        evals = prepared.spec.budget.evaluations
+        generations = -(-evals // population) if evals else prepared.study.default_generations
+    return JobSize(population, int(generations), max(1, int(prepared.problem.n_samples)))
 
 
 @dataclass(frozen=True, eq=False)

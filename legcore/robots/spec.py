@@ -16,7 +16,15 @@ import math
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    field_validator,
+    model_validator,
+)
 
 __all__ = [
     "FiniteFloat",
@@ -224,4 +232,15 @@ class URDFRobotSpec(_Strict):
     description: str = Field(default="", max_length=4000)
 
 
-RobotSpec = Annotated[DHRobotSpec | URDFRobotSpec, Field(discriminator="kind")]
+def _robot_kind(value: object) -> str | None:
+    """The ``kind`` tag of a robot spec; a mapping without one is a DH spec (the default)."""
+    if isinstance(value, dict):
+        kind = value.get("kind", "dh")
+        return kind if isinstance(kind, str) else None
+    return getattr(value, "kind", None)
+
+
+RobotSpec = Annotated[
+    Annotated[DHRobotSpec, Tag("dh")] | Annotated[URDFRobotSpec, Tag("urdf")],
+    Discriminator(_robot_kind),
+]

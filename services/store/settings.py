@@ -68,6 +68,9 @@ class Settings(BaseModel):
     max_attempts: int = Field(
         default=3, gt=0, description="Claims of one job before the reaper fails it."
     )
+    checkpoint_every: int = Field(
+        default=5, gt=0, description="Generations between two checkpoints of a running job."
+    )
     sqlite_busy_timeout_ms: int = Field(
         default=30_000, ge=0, description="SQLite busy_timeout of every connection."
     )

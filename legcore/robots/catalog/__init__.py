@@ -16,6 +16,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from functools import cache
+from typing import Any
 
 from legcore.robots.legged import LeggedRobot
 from legcore.robots.model import Robot
@@ -36,7 +37,7 @@ def names() -> tuple[str, ...]:
     return tuple(sorted(_ENTRIES))
 
 
-def _module(name: str):  # type: ignore[no-untyped-def]
+def _module(name: str) -> Any:
     if name not in _ENTRIES:
         raise KeyError(f"unknown catalog robot {name!r}; known: {', '.join(names())}")
     return importlib.import_module(_ENTRIES[name])

@@ -1,0 +1,1 @@
+"""Celery worker: the app, the job task, its executor and the lease reaper."""
