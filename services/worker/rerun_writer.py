@@ -1,0 +1,661 @@
+"""Rerun recordings of jobs: write, merge, replay ``.rrd`` files (the only module importing rerun).
+
+    write_recording(result, path, recording_id=job_id)   # one job  -> path (.rrd)
+    merge_recordings([a, b], out, names=["a", "b"])       # a sweep  -> out, under /jobs/<name>/
+    open_viewer(path)                                     # native viewer, or the web viewer
+    serve_web(path, port)                                 # web viewer on 127.0.0.1:port
+
+What is logged where is decided by the pure :mod:`legcore.recording` (``docs/recording.md``);
+this module turns its items into archetypes:
+
+- scalar series → ``Scalars`` sent column-wise with ``send_columns`` (one call per series, on
+  the ``time`` timeline in s or the ``generation`` sequence timeline), named by a static
+  ``SeriesLines``;
+- poses → ``Transform3D`` columns (translation + unit quaternion xyzw, one ``send_columns``
+  call per frame) with static ``TransformAxes3D`` (link frames), ``Capsules3D`` (links) or
+  ``Boxes3D`` (the body of a legged robot) in the entity's own frame;
+- the tool/foot point → ``Points3D`` columns; the path, support polygon → ``LineStrips3D``;
+  targets → ``Points3D``; obstacles → ``Boxes3D``;
+- the Pareto front per generation → ``Points3D`` (``Points2D`` for two objectives) columns
+  partitioned by generation.
+
+Each job gets its own ``RecordingStream`` (never the global one: several jobs may run in one
+process) saving to a temporary file next to ``path``; the file is moved into place with
+``os.replace`` only after the stream is flushed and closed, so ``path`` is either absent or a
+complete recording. A blueprint (3D view of robot, path and scene; time-series tabs for q, qd,
+qdd, jerk, τ, power, energy, the best objective per generation; the front) is saved with it.
+
+Replay: a stored ``.rrd`` opens in the native viewer (``rerun FILE``) or, where there is no
+display, in the web viewer: the bundled ``rerun --serve-web`` runs in a child process bound to
+``127.0.0.1`` and this process pushes the file (with its blueprint) to it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.error
+import urllib.request
+import uuid
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
+from urllib.parse import quote
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+from rerun.chunk import RrdReader
+
+from legcore import recording as lrec
+from legcore.recording import (
+    DEFAULT_MAX_SAMPLES,
+    FrontTrack,
+    MotionRecording,
+    PoseTrack,
+    RunRecording,
+    Series,
+    record_run,
+)
+
+if TYPE_CHECKING:
+    from legcore.robots.legged import LeggedRobot
+    from legcore.robots.model import Robot
+    from legcore.runner import RunResult
+
+__all__ = [
+    "APP_ID",
+    "ViewerHandle",
+    "blueprint_for",
+    "has_display",
+    "log_run",
+    "merge_recordings",
+    "open_viewer",
+    "read_entities",
+    "rerun_binary",
+    "serve_web",
+    "viewer_url",
+    "write_recording",
+]
+
+#: Rerun application id of every LegOpt recording (blueprints are matched to it).
+APP_ID = "legopt"
+
+_SIGNAL_VIEWS = (
+    ("q", "q (rad)"),
+    ("qd", "qd (rad/s)"),
+    ("qdd", "qdd (rad/s²)"),
+    ("jerk", "jerk (rad/s³)"),
+    ("tau", "τ (N·m)"),
+    ("power", "power (W)"),
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# writing
+# ---------------------------------------------------------------------------------------------
+
+
+def write_recording(
+    result: RunResult,
+    path: Path,
+    *,
+    recording_id: str | None = None,
+    max_samples: int = DEFAULT_MAX_SAMPLES,
+    fronts: Mapping[int, Any] | Sequence[tuple[int, Any]] | None = None,
+    robot: Robot | LeggedRobot | None = None,
+) -> None:
+    """Write the Rerun recording of a finished job to ``path`` (``.rrd``).
+
+    ``recording_id``: the recording's id (the job id; a fresh UUID by default).
+    ``max_samples``: display cap per signal / pose track (see :mod:`legcore.recording`).
+    ``fronts``: optional Pareto front per generation ``{generation: F (k, m)}``; without it the
+    final front is logged at the last generation. ``robot``: override the robot drawn.
+
+    Written to a temporary file next to ``path`` and moved into place only once the stream is
+    closed; on any error the temporary file is removed and ``path`` is left untouched.
+    """
+    rec = record_run(result, robot=robot, fronts=fronts, max_samples=max_samples)
+    _write_atomic(Path(path), recording_id, lambda stream: log_run(stream, rec), blueprint_for(rec))
+
+
+def _write_atomic(
+    path: Path,
+    recording_id: str | None,
+    log: Any,
+    blueprint: rrb.Blueprint | None,
+) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+    stream = rr.RecordingStream(APP_ID, recording_id=recording_id or str(uuid.uuid4()))
+    try:
+        stream.save(tmp, default_blueprint=blueprint)
+        log(stream)
+        stream.flush()
+        stream.disconnect()  # closes the file sink: the file is complete only now
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(Exception):
+            stream.disconnect()
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def log_run(stream: rr.RecordingStream, rec: RunRecording) -> None:
+    """Log every item of ``rec`` to ``stream`` (column-wise where the data varies)."""
+    stream.send_recording_name(rec.title)
+    stream.send_property(
+        "legopt",
+        rr.AnyValues(
+            **{k: v for k, v in rec.properties.items() if isinstance(v, str | int | float)}  # type: ignore[arg-type]
+        ),
+    )
+    for m in rec.motions():
+        _log_motion(stream, m)
+    for s in rec.optimization:
+        _log_series(stream, s)
+    for f in (rec.front, rec.best_point):
+        if f is not None:
+            _log_front(stream, f)
+
+
+def _time_column(timeline: str, index: np.ndarray) -> rr.TimeColumn:
+    if timeline == "generation":
+        return rr.TimeColumn("generation", sequence=np.asarray(index, dtype=np.int64))
+    return rr.TimeColumn(timeline, duration=np.asarray(index, dtype=np.float64))
+
+
+def _log_series(stream: rr.RecordingStream, s: Series) -> None:
+    stream.send_columns(
+        s.path,
+        indexes=[_time_column(s.timeline, s.index)],
+        columns=rr.Scalars.columns(scalars=np.asarray(s.values, dtype=np.float64)),
+    )
+    name = f"{s.label} ({s.unit})" if s.unit else s.label
+    stream.log(s.path, rr.SeriesLines(names=name), static=True)
+
+
+def _log_pose(stream: rr.RecordingStream, p: PoseTrack) -> None:
+    quat = lrec.quaternion_xyzw(p.rotation).astype(np.float32)  # vectorised; mat3x3 is not
+    if p.t is None:
+        stream.log(
+            p.path,
+            rr.Transform3D(translation=p.translation[0], quaternion=rr.Quaternion(xyzw=quat[0])),
+            static=True,
+        )
+    else:
+        stream.send_columns(
+            p.path,
+            indexes=[_time_column("time", p.t)],
+            columns=rr.Transform3D.columns(
+                translation=np.asarray(p.translation, dtype=np.float32), quaternion=quat
+            ),
+        )
+    if p.geometry == "axes":
+        stream.log(p.path, rr.TransformAxes3D(p.axis_length), static=True)
+    elif p.geometry == "capsule":
+        stream.log(
+            p.path,
+            rr.Capsules3D(lengths=[p.length], radii=[p.radius], colors=[p.color]),
+            static=True,
+        )
+    elif p.geometry == "box":
+        stream.log(
+            p.path,
+            rr.Boxes3D(half_sizes=[p.half_size], colors=[(*p.color, 200)], fill_mode="solid"),
+            static=True,
+        )
+
+
+def _log_motion(stream: rr.RecordingStream, m: MotionRecording) -> None:
+    for s in m.series:
+        _log_series(stream, s)
+    for p in m.poses:
+        _log_pose(stream, p)
+    for pt in m.points:
+        N, P = pt.positions.shape[:2]
+        stream.send_columns(
+            pt.path,
+            indexes=[_time_column("time", pt.t)],
+            columns=rr.Points3D.columns(
+                positions=np.asarray(pt.positions, dtype=np.float32).reshape(-1, 3)
+            ).partition([P] * N),
+        )
+        stream.log(
+            pt.path, rr.Points3D.from_fields(radii=[pt.radius], colors=[pt.color]), static=True
+        )
+    for pl in m.polylines:
+        stream.log(
+            pl.path, rr.LineStrips3D([pl.points], radii=[pl.radius], colors=[pl.color]), static=True
+        )
+    for tr in m.polyline_tracks:
+        N = len(tr.strips)
+        stream.send_columns(
+            tr.path,
+            indexes=[_time_column("time", tr.t)],
+            columns=rr.LineStrips3D.columns(
+                strips=[np.asarray(s, dtype=np.float32) for s in tr.strips]
+            ).partition([1] * N),
+        )
+        stream.log(
+            tr.path, rr.LineStrips3D.from_fields(radii=[tr.radius], colors=[tr.color]), static=True
+        )
+    for ps in m.point_sets:
+        stream.log(
+            ps.path, rr.Points3D(ps.points, radii=[ps.radius], colors=[ps.color]), static=True
+        )
+    for b in m.boxes:
+        stream.log(
+            b.path,
+            rr.Boxes3D(
+                centers=b.centers,
+                half_sizes=b.half_sizes,
+                colors=[(*b.color, 110)],
+                fill_mode="solid",
+            ),
+            static=True,
+        )
+
+
+def _log_front(stream: rr.RecordingStream, f: FrontTrack) -> None:
+    lengths = [int(p.shape[0]) for p in f.points]
+    pts = (
+        np.concatenate(f.points).astype(np.float32)
+        if f.points
+        else np.zeros((0, f.dims), np.float32)
+    )
+    arche: Any = rr.Points3D if f.dims == 3 else rr.Points2D
+    stream.send_columns(
+        f.path,
+        indexes=[_time_column("generation", f.generations)],
+        columns=arche.columns(positions=pts[:, : f.dims]).partition(lengths),
+    )
+    stream.log(f.path, arche.from_fields(radii=[f.radius], colors=[f.color]), static=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# blueprint
+# ---------------------------------------------------------------------------------------------
+
+
+def read_entities(path: Path) -> dict[str, set[str]]:
+    """Entity paths of a ``.rrd`` file's recording (no leading ``/``) → archetype names logged
+    there (e.g. ``{"signals/q/q1": {"rerun.archetypes.Scalars", ...}}``)."""
+    out: dict[str, set[str]] = {}
+    for chunk in RrdReader(path).stream():
+        ep = chunk.entity_path.lstrip("/")
+        if ep.startswith("__"):
+            continue
+        names = out.setdefault(ep, set())
+        for f in chunk.to_record_batch().schema:
+            a = (f.metadata or {}).get(b"rerun:archetype")
+            if a:
+                names.add(a.decode())
+    return out
+
+
+def _entities_of(rec: RunRecording) -> dict[str, set[str]]:
+    out: dict[str, set[str]] = {p: set() for p in rec.entity_paths()}
+    for f in (rec.front, rec.best_point):
+        if f is not None:
+            out[f.path] = {
+                "rerun.archetypes.Points3D" if f.dims == 3 else "rerun.archetypes.Points2D"
+            }
+    return out
+
+
+def _job_views(
+    ents: Mapping[str, set[str]], root: str, name: str | None
+) -> tuple[list[Any], list[Any]]:
+    """(spatial views, time-series views) for one job's entities under ``root`` ('' or
+    'jobs/<name>/')."""
+
+    def has(prefix: str) -> bool:
+        p = root + prefix
+        return any(e == p or e.startswith(p + "/") for e in ents)
+
+    tag = f"{name}: " if name else ""
+    spatial: list[Any] = []
+    series: list[Any] = []
+    if has("world"):
+        spatial.append(rrb.Spatial3DView(origin=root + "world", name=f"{tag}robot, path and scene"))
+    front = ents.get(root + "optimization/front")
+    if front is not None:
+        contents = [f"+ /{root}optimization/front", f"+ /{root}optimization/best_point"]
+        if any("Points2D" in a for a in front):
+            spatial.append(
+                rrb.Spatial2DView(
+                    origin=root + "optimization", contents=contents, name=f"{tag}Pareto front"
+                )
+            )
+        else:
+            spatial.append(
+                rrb.Spatial3DView(
+                    origin=root + "optimization", contents=contents, name=f"{tag}Pareto front"
+                )
+            )
+    for kind, title in _SIGNAL_VIEWS:
+        if has(f"signals/{kind}"):
+            series.append(rrb.TimeSeriesView(origin=f"{root}signals/{kind}", name=f"{tag}{title}"))
+    if has("signals/energy"):
+        extra = sorted(
+            f"+ /{e}"
+            for e in ents
+            if e.startswith(root + "baselines/") and e.endswith("/signals/energy/total")
+        )
+        series.append(
+            rrb.TimeSeriesView(
+                origin=f"{root}signals/energy",
+                contents=[f"+ /{root}signals/energy/**", *extra],
+                name=f"{tag}energy (J), best vs baselines" if extra else f"{tag}energy (J)",
+            )
+        )
+    if has("optimization/best"):
+        series.append(
+            rrb.TimeSeriesView(
+                origin=f"{root}optimization/best", name=f"{tag}best objective / generation"
+            )
+        )
+    baselines = sorted(
+        {e[len(root) :].split("/")[1] for e in ents if e.startswith(root + "baselines/")}
+    )
+    for b in baselines:
+        if has(f"baselines/{b}/signals/q"):
+            series.append(
+                rrb.TimeSeriesView(
+                    origin=f"{root}baselines/{b}/signals/q", name=f"{tag}baseline {b}: q (rad)"
+                )
+            )
+    return spatial, series
+
+
+def blueprint_for(
+    content: RunRecording | Mapping[str, set[str]], *, jobs: Sequence[str] = ()
+) -> rrb.Blueprint:
+    """The default layout: spatial views (robot/path/scene, Pareto front) on the left, tabs of
+    time-series views (q, qd, qdd, jerk, τ, power, energy, best objective, baselines) on the
+    right. ``content``: a :class:`RunRecording` or an entity map (:func:`read_entities`).
+    ``jobs``: for a merged recording, the job names under ``/jobs/<name>/`` (one set of views
+    per job, plus overlays of every job's front, energy and best objective)."""
+    ents = _entities_of(content) if isinstance(content, RunRecording) else dict(content)
+    spatial: list[Any] = []
+    series: list[Any] = []
+    if jobs:
+        fronts = [
+            f"+ /jobs/{j}/optimization/front"
+            for j in jobs
+            if f"jobs/{j}/optimization/front" in ents
+        ]
+        if len(fronts) > 1:
+            two_d = any(
+                "Points2D" in a
+                for j in jobs
+                for a in ents.get(f"jobs/{j}/optimization/front", set())
+            )
+            view = rrb.Spatial2DView if two_d else rrb.Spatial3DView
+            spatial.append(view(origin="jobs", contents=fronts, name="Pareto fronts, all jobs"))
+        energy = [
+            f"+ /jobs/{j}/signals/energy/total"
+            for j in jobs
+            if f"jobs/{j}/signals/energy/total" in ents
+        ]
+        if energy:
+            series.append(
+                rrb.TimeSeriesView(origin="jobs", contents=energy, name="energy (J), all jobs")
+            )
+        best = [
+            f"+ /jobs/{j}/optimization/best/**"
+            for j in jobs
+            if any(e.startswith(f"jobs/{j}/optimization/best/") for e in ents)
+        ]
+        if best:
+            series.append(
+                rrb.TimeSeriesView(origin="jobs", contents=best, name="best objective, all jobs")
+            )
+        for j in jobs:
+            sp, se = _job_views(ents, f"jobs/{j}/", j)
+            spatial.extend(sp)
+            series.extend(se)
+    else:
+        spatial, series = _job_views(ents, "", None)
+    parts: list[Any] = []
+    if spatial:
+        parts.append(rrb.Vertical(*spatial) if len(spatial) > 1 else spatial[0])
+    if series:
+        parts.append(rrb.Tabs(*series))
+    if not parts:
+        return rrb.Blueprint(auto_layout=True, auto_views=True)
+    root: Any = rrb.Horizontal(*parts, column_shares=[3, 2]) if len(parts) == 2 else parts[0]
+    has_time = any(e.startswith("signals/") or "/signals/" in e for e in ents)
+    return rrb.Blueprint(
+        root,
+        rrb.TimePanel(timeline="time" if has_time else "generation"),
+        collapse_panels=False,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# merging
+# ---------------------------------------------------------------------------------------------
+
+
+def merge_recordings(
+    paths: Sequence[Path],
+    out: Path,
+    names: Sequence[str],
+    *,
+    recording_id: str | None = None,
+) -> None:
+    """Merge several jobs' recordings into one ``out`` for side-by-side replay: every entity of
+    ``paths[i]`` moves under ``/jobs/<names[i]>/`` (names made entity-path safe), timelines are
+    kept (all jobs' ``time`` and ``generation`` axes overlap), and a blueprint with one set of
+    views per job plus overlays of the fronts, energies and best objectives is saved with it.
+    Atomic like :func:`write_recording`."""
+    paths = [Path(p) for p in paths]
+    if len(paths) != len(names):
+        raise ValueError(
+            f"names: expected {len(paths)} names (one per recording), got {len(names)}"
+        )
+    if not paths:
+        raise ValueError("paths: no recordings to merge")
+    parts = lrec.unique_parts(names)
+    for p in paths:
+        if not p.is_file():
+            raise FileNotFoundError(f"recording not found: {p}")
+    ents: dict[str, set[str]] = {}
+    for p, part in zip(paths, parts, strict=True):
+        for e, a in read_entities(p).items():
+            ents[f"jobs/{part}/{e}"] = a
+
+    def log(stream: rr.RecordingStream) -> None:
+        stream.send_recording_name(f"{len(paths)} jobs: {', '.join(parts)}")
+        for p, part in zip(paths, parts, strict=True):
+            stream.send_chunks(
+                c.with_entity_path(f"/jobs/{part}{c.entity_path}")
+                for c in RrdReader(p).stream()
+                if not c.entity_path.startswith("/__")
+            )
+
+    _write_atomic(Path(out), recording_id, log, blueprint_for(ents, jobs=parts))
+
+
+# ---------------------------------------------------------------------------------------------
+# replay
+# ---------------------------------------------------------------------------------------------
+
+
+def has_display() -> bool:
+    """True where a native viewer window can open (macOS/Windows, or DISPLAY/WAYLAND_DISPLAY)."""
+    if sys.platform in ("darwin", "win32"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def rerun_binary() -> str:
+    """Path of the Rerun viewer/CLI executable bundled with rerun-sdk (``RERUN_CLI_PATH``
+    overrides). The ``rerun`` console script is a Python wrapper whose child would outlive a
+    terminated wrapper, so the binary is run directly."""
+    env = os.environ.get("RERUN_CLI_PATH")
+    if env:
+        return env
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.origin:
+        exe = Path(spec.origin).parent / ("rerun.exe" if sys.platform == "win32" else "rerun")
+        if exe.exists():
+            return str(exe)
+    found = shutil.which("rerun")
+    if found:
+        return found
+    raise FileNotFoundError("the rerun viewer binary was not found (is rerun-sdk installed?)")
+
+
+def viewer_url(web_port: int, grpc_url: str, host: str = "127.0.0.1") -> str:
+    """The web viewer page that connects to ``grpc_url``."""
+    return f"http://{host}:{web_port}/?url={quote(grpc_url, safe='')}"
+
+
+@dataclass
+class ViewerHandle:
+    """A viewer running in a child process: ``url`` is the web viewer page (None for the
+    native viewer). ``wait()`` blocks until it exits, ``stop()`` ends it; usable in ``with``."""
+
+    process: subprocess.Popen[bytes]
+    url: str | None
+    log: IO[bytes] | None = None
+
+    def wait(self, timeout: float | None = None) -> int:
+        return self.process.wait(timeout)
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """Terminate the viewer process (SIGTERM, then SIGKILL after ``timeout`` s)."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait(timeout)
+        if self.log is not None:
+            self.log.close()
+
+    def __enter__(self) -> ViewerHandle:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def _free_port(host: str = "127.0.0.1") -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((host, 0))
+        return int(s.getsockname()[1])
+
+
+def _push(path: Path, grpc_url: str) -> None:
+    """Send the recording ``path`` (with its blueprint, rebuilt from its entities) to the gRPC
+    server at ``grpc_url``; the server keeps it for viewers that connect later."""
+    reader = RrdReader(path)
+    stores = reader.recordings()
+    rid = stores[0].recording_id if stores else str(uuid.uuid4())
+    ents = read_entities(path)
+    jobs = sorted({e.split("/")[1] for e in ents if e.startswith("jobs/") and e.count("/") >= 2})
+    stream = rr.RecordingStream(APP_ID, recording_id=rid)
+    try:
+        stream.connect_grpc(grpc_url, default_blueprint=blueprint_for(ents, jobs=jobs))
+        stream.send_chunks(c for c in reader.stream() if not c.entity_path.startswith("/__"))
+        stream.flush()
+    finally:
+        stream.disconnect()
+
+
+def serve_web(
+    path: Path,
+    port: int | None = 9090,
+    *,
+    grpc_port: int | None = None,
+    bind: str = "127.0.0.1",
+    timeout: float = 30.0,
+) -> ViewerHandle:
+    """Serve the recording ``path`` in the Rerun web viewer on ``http://<bind>:<port>/``.
+
+    Starts the bundled ``rerun --serve-web`` (web viewer over HTTP + a gRPC proxy on
+    ``grpc_port``; both bound to ``bind``, free ports when None) in a child process, waits until
+    the page answers HTTP 200, then sends the file's data and blueprint to the proxy, which
+    keeps them for every browser that connects. Returns the handle (``handle.url`` is the page
+    to open; ``handle.stop()`` or a ``with`` block ends the server).
+
+    (The file is pushed from here instead of passed to ``rerun --serve-web FILE`` because that
+    file loader keeps a core busy for as long as it serves.)
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"recording not found: {path}")
+    port = port or _free_port(bind)
+    grpc_port = grpc_port or _free_port(bind)
+    cmd = [
+        rerun_binary(),
+        "--serve-web",
+        "--bind",
+        bind,
+        "--web-viewer-port",
+        str(port),
+        "--port",
+        str(grpc_port),
+    ]
+    log = tempfile.TemporaryFile()  # not a pipe: a long session must never block on its log
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+    host = "127.0.0.1" if bind in ("0.0.0.0", "::") else bind  # noqa: S104
+    grpc_url = f"rerun+http://{host}:{grpc_port}/proxy"
+    handle = ViewerHandle(proc, viewer_url(port, grpc_url, host), log)
+    try:
+        _wait_http(f"http://{host}:{port}/", proc, timeout, log)
+        _push(path, grpc_url)
+    except BaseException:
+        handle.stop()
+        raise
+    return handle
+
+
+def _wait_http(url: str, proc: subprocess.Popen[bytes], timeout: float, log: IO[bytes]) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            log.seek(0)
+            err = log.read().decode(errors="replace")
+            raise RuntimeError(
+                f"rerun web viewer exited ({proc.returncode}): {err.strip()[-2000:]}"
+            )
+        try:
+            with urllib.request.urlopen(url, timeout=1.0) as r:
+                if r.status == 200:
+                    return
+        except (urllib.error.URLError, OSError):
+            pass
+        time.sleep(0.1)
+    raise TimeoutError(f"rerun web viewer did not answer at {url} within {timeout} s")
+
+
+def open_viewer(path: Path, *, web: bool | None = None, port: int = 9090) -> ViewerHandle:
+    """Open the recording ``path``: the native Rerun viewer (``rerun FILE``) where there is a
+    display, else (or with ``web=True``) the web viewer served on ``127.0.0.1:port`` from a
+    child process. Returns the handle: ``handle.url`` is the page to open (web), ``wait()``
+    blocks until the viewer exits, ``stop()`` ends it."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"recording not found: {path}")
+    if web is None:
+        web = not has_display()
+    if web:
+        return serve_web(path, port)
+    proc = subprocess.Popen([rerun_binary(), str(path)])
+    return ViewerHandle(proc, None)

@@ -1,0 +1,507 @@
+"""services.worker.rerun_writer: .rrd files read back with the Rerun SDK's own reader."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import time
+from collections import defaultdict
+from pathlib import Path
+from types import SimpleNamespace
+
+import httpx
+import numpy as np
+import pyarrow as pa
+import pytest
+import yaml
+from rerun.chunk import RrdReader
+
+from legcore import recording as R
+from legcore.kinematics import fk, frames
+from legcore.problems.study import Box, Motion, Solution
+from legcore.robots import catalog
+from services.worker import rerun_writer as W
+
+EXAMPLES = sorted((Path(__file__).resolve().parents[3] / "examples").glob("*.yaml"))
+
+
+# ---------------------------------------------------------------------------------------------
+# fixtures and readers
+# ---------------------------------------------------------------------------------------------
+
+
+def arm_motion(K: int = 5000, T: float = 3.0) -> Motion:
+    robot = catalog.get("articulated_5dof")
+    t = np.linspace(0.0, T, K)
+    q = robot.home + 0.3 * np.sin(np.outer(t, np.arange(1, 6)))
+    qd = np.gradient(q, t, axis=0)
+    qdd = np.gradient(qd, t, axis=0)
+    power = qd * qdd  # any numbers will do here
+    return Motion(
+        t=t,
+        q=q,
+        joint_names=tuple(f"q{i + 1}" for i in range(5)),
+        qd=qd,
+        qdd=qdd,
+        jerk=np.gradient(qdd, t, axis=0),
+        tau=qdd.copy(),
+        power=power,
+        energy=R._cumtrapz(np.abs(power), t).sum(axis=1),
+        tool=fk(robot, q)[:, :3, 3],
+        robot="articulated_5dof",
+        scene={
+            "targets": np.array([[0.5, 0.0, 0.5], [0.6, 0.0, 0.5]]),
+            "obstacles": [Box((0.3, 0.0, 0.5), (0.03, 0.02, 0.013))],
+            "support_polygon": np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]),
+        },
+    )
+
+
+def hexapod_like_motion(K: int) -> Motion:
+    """All six legs of the CITEDI hexapod (18 joints), body moving."""
+    robot = catalog.get("citedi_hexapod")
+    legs = tuple(leg.name for leg in robot.legs)
+    t = np.linspace(0.0, 2.0, K)
+    base = np.array([0.0, -np.pi / 8, -np.pi / 4])
+    q = np.concatenate([base + 0.2 * np.sin(np.outer(t, [1, 2, 3]) + i) for i in range(6)], axis=1)
+    body = np.tile(np.eye(4), (K, 1, 1))
+    body[:, 1, 3] = 0.03 * t
+    d = np.gradient(q, t, axis=0)
+    return Motion(
+        t=t,
+        q=q,
+        joint_names=tuple(f"{leg}.q{j + 1}" for leg in legs for j in range(3)),
+        qd=d,
+        qdd=d,
+        jerk=d,
+        tau=d,
+        power=d,
+        energy=np.cumsum(np.abs(d).sum(axis=1)),
+        tool=body[:, :3, 3].copy(),
+        robot="citedi_hexapod",
+        legs=legs,
+        scene={"body_T": body, "ground_z": -0.07},
+    )
+
+
+def fake_result(
+    motion: Motion | None,
+    *,
+    m: int = 3,
+    generations: int = 10,
+    baselines: dict[str, Motion] | None = None,
+    front_size: int = 50,
+) -> SimpleNamespace:
+    """Duck-typed RunResult."""
+    rng = np.random.default_rng(0)
+    history = [
+        {
+            "generation": g,
+            "n_evals": 100 * g,
+            "elapsed": 0.1 * g,
+            "best_f": [1.0 / g + j for j in range(m)],
+            "best_cv": 0.0,
+            "front_size": front_size,
+            "ideal": [0.0] * m,
+            "nadir": [1.0] * m,
+        }
+        for g in range(1, generations + 1)
+    ]
+    return SimpleNamespace(
+        spec=None,
+        status="succeeded",
+        best=Solution(x=np.zeros(2), objectives={}, metrics={}, motion=motion),
+        pareto=[{"x": [0.0], "objectives": list(f)} for f in rng.random((front_size, m))],
+        baselines={
+            k: Solution(x=None, objectives={}, metrics={}, motion=v)
+            for k, v in (baselines or {}).items()
+        },
+        history=history,
+        extras={},
+        optimizer={"kind": "moead"},
+        objective_names=tuple(f"f{j + 1}" for j in range(m)),
+    )
+
+
+def read_back(path: Path) -> dict[str, list[pa.RecordBatch]]:
+    """Entity path (no leading /) → record batches of its chunks, via rerun.chunk.RrdReader."""
+    out: dict[str, list[pa.RecordBatch]] = defaultdict(list)
+    for chunk in RrdReader(path).stream():
+        out[chunk.entity_path.lstrip("/")].append(chunk.to_record_batch())
+    return dict(out)
+
+
+def column(batches: list[pa.RecordBatch], name: str, index: str) -> tuple[np.ndarray, list]:
+    """(index values — s for a duration timeline —, component values) of the rows of
+    ``batches`` that carry ``name``, sorted by index."""
+    idx: list[np.ndarray] = []
+    vals: list = []
+    for b in batches:
+        if name in b.schema.names and index in b.schema.names:
+            col = b.column(index)
+            scale = 1e-9 if pa.types.is_duration(col.type) else 1.0
+            idx.append(col.cast(pa.int64()).to_numpy() * scale)
+            vals.extend(b.column(name).to_pylist())
+    i = np.concatenate(idx) if idx else np.zeros(0)
+    order = np.argsort(i, kind="stable")
+    return i[order], [vals[k] for k in order]
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) given as x, y, z, w."""
+    x, y, z, w = (q[:, i].astype(float) for i in range(4))
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=1,
+    )
+
+
+def static_components(batches: list[pa.RecordBatch]) -> set[str]:
+    return {n for b in batches for n in b.schema.names if not n.startswith("rerun.") and ":" in n}
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, SimpleNamespace, dict]:
+    """One recording of a 3-objective run with per-generation fronts and two baselines."""
+    path = tmp_path_factory.mktemp("rec") / "job.rrd"
+    res = fake_result(
+        arm_motion(K=5000),
+        generations=20,
+        baselines={"parabolic": arm_motion(K=600), "min energy": arm_motion(K=300)},
+    )
+    rng = np.random.default_rng(3)
+    fronts = {g: rng.random((40 + g, 3)) for g in range(1, 21)}
+    W.write_recording(res, path, recording_id="job-123", fronts=fronts)
+    return path, res, fronts
+
+
+# ---------------------------------------------------------------------------------------------
+# write
+# ---------------------------------------------------------------------------------------------
+
+
+def test_file_is_complete_with_ids_and_blueprint(written: tuple) -> None:
+    path, _, _ = written
+    reader = RrdReader(path)
+    (store,) = reader.recordings()
+    assert store.application_id == "legopt" and store.recording_id == "job-123"
+    assert len(reader.blueprints()) == 1
+    assert len(reader.store()) > 0  # the footer/manifest exists: the stream was closed
+    assert not list(path.parent.glob("*.tmp"))
+
+
+def test_entity_paths(written: tuple) -> None:
+    path, _, _ = written
+    ents = read_back(path)
+    expected = (
+        [
+            f"signals/{k}/q{j}"
+            for k in ("q", "qd", "qdd", "jerk", "tau", "power")
+            for j in range(1, 6)
+        ]
+        + [f"signals/energy/q{j}" for j in range(1, 6)]
+        + ["signals/energy/total"]
+        + [f"world/robot/frames/{k}" for k in range(6)]
+        + [f"world/robot/frames/{k}/link" for k in range(1, 6)]
+        + ["world/robot/tool", "world/path"]
+        + ["world/scene/targets", "world/scene/obstacles", "world/scene/support_polygon"]
+        + ["optimization/best/f1", "optimization/front_size", "optimization/ideal/f2"]
+        + ["optimization/front", "optimization/best_point"]
+        + ["baselines/parabolic/signals/q/q1", "baselines/min_energy/signals/energy/total"]
+        + ["world/baselines/parabolic/path", "world/baselines/min_energy/path"]
+    )
+    missing = [e for e in expected if e not in ents]
+    assert not missing
+    assert set(W.read_entities(path)) == set(ents) - {e for e in ents if e.startswith("__")}
+    assert "rerun.archetypes.Capsules3D" in W.read_entities(path)["world/robot/frames/3/link"]
+
+
+def test_joint_signals_sample_counts_and_values(written: tuple) -> None:
+    path, res, _ = written
+    ents = read_back(path)
+    motion = res.best.motion
+    rec = R.record_run(res)
+    for kind in ("q", "qd", "tau", "power"):
+        for j in range(1, 6):
+            t, vals = column(ents[f"signals/{kind}/q{j}"], "Scalars:scalars", "time")
+            assert len(t) == rec.best.series_at(f"signals/{kind}/q{j}").n_samples
+            assert 1000 < len(t) <= 2000
+    # q at several times equals the Motion's q (time stamps are the original samples' times)
+    t, vals = column(ents["signals/q/q3"], "Scalars:scalars", "time")
+    q3 = np.array([v[0] for v in vals])
+    for k in (0, 1234, 2500, 4999):
+        hit = np.flatnonzero(np.isclose(t, motion.t[k], rtol=0, atol=1e-9))
+        if hit.size:
+            assert q3[hit[0]] == motion.q[k, 2]
+    k = np.searchsorted(motion.t, t - 1e-12)
+    np.testing.assert_allclose(motion.t[k], t, atol=1e-9)
+    np.testing.assert_array_equal(q3, motion.q[k, 2])
+    assert t[0] == 0.0 and t[-1] == pytest.approx(motion.t[-1])
+    # baselines: all their samples (fewer than the cap)
+    tb, _ = column(ents["baselines/parabolic/signals/q/q2"], "Scalars:scalars", "time")
+    assert len(tb) == 600
+    assert "SeriesLines:names" in static_components(ents["signals/q/q3"])
+
+
+def test_link_frames_are_transforms_over_time(written: tuple) -> None:
+    path, res, _ = written
+    ents = read_back(path)
+    robot = catalog.get("articulated_5dof")
+    motion = res.best.motion
+    t, tr = column(ents["world/robot/frames/3"], "Transform3D:translation", "time")
+    assert len(t) == 2000
+    _, quats = column(ents["world/robot/frames/3"], "Transform3D:quaternion", "time")
+    k = np.searchsorted(motion.t, t - 1e-12)
+    F = frames(robot, motion.q[k])
+    np.testing.assert_allclose(np.array(tr)[:, 0], F[:, 3, :3, 3], atol=1e-6)  # float32
+    np.testing.assert_allclose(quat_to_matrix(np.array(quats)[:, 0]), F[:, 3, :3, :3], atol=1e-6)
+    # links are static capsules in their frame (DH chain), logged once
+    link = ents["world/robot/frames/3/link"]
+    assert all(b.num_rows == 1 for b in link)
+    assert {"Capsules3D:lengths", "Transform3D:translation"} <= static_components(link)
+
+
+def test_front_per_generation(written: tuple) -> None:
+    path, _, fronts = written
+    ents = read_back(path)
+    g, pts = column(ents["optimization/front"], "Points3D:positions", "generation")
+    assert list(g) == list(range(1, 21))
+    assert [len(p) for p in pts] == [40 + i for i in range(1, 21)]
+    got = np.array(pts[4])
+    np.testing.assert_allclose(got, fronts[5], atol=1e-6)  # under the cap: every point, in order
+    gb, best = column(ents["optimization/best/f1"], "Scalars:scalars", "generation")
+    np.testing.assert_allclose([b[0] for b in best], 1.0 / np.arange(1, 21))
+    assert list(gb) == list(range(1, 21))
+
+
+def test_two_objective_front_is_points2d(tmp_path: Path) -> None:
+    path = tmp_path / "two.rrd"
+    W.write_recording(fake_result(None, m=2, generations=3), path)
+    ents = read_back(path)
+    g, pts = column(ents["optimization/front"], "Points2D:positions", "generation")
+    assert list(g) == [3] and len(pts[0]) == 50  # final front only, at the last generation
+    assert not any(e.startswith("signals/") for e in ents)
+
+
+def test_failed_write_leaves_no_partial_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "job.rrd"
+
+    def boom(*a: object, **k: object) -> None:
+        raise RuntimeError("disk on fire")
+
+    monkeypatch.setattr(W, "_log_front", boom)  # fails after the signals were logged
+    with pytest.raises(RuntimeError, match="disk on fire"):
+        W.write_recording(fake_result(arm_motion(K=500)), path)
+    assert not path.exists()
+    assert list(tmp_path.iterdir()) == []
+    # an existing recording is left as it was
+    path.write_bytes(b"previous")
+    with pytest.raises(RuntimeError):
+        W.write_recording(fake_result(arm_motion(K=500)), path)
+    assert path.read_bytes() == b"previous"
+    assert [p.name for p in tmp_path.iterdir()] == ["job.rrd"]
+
+
+def test_long_motion_is_capped(tmp_path: Path) -> None:
+    path = tmp_path / "long.rrd"
+    motion = arm_motion(K=200_000, T=200.0)
+    W.write_recording(fake_result(motion, m=1), path, max_samples=1000)
+    ents = read_back(path)
+    t, _ = column(ents["signals/qd/q1"], "Scalars:scalars", "time")
+    assert len(t) <= 1000
+    t, _ = column(ents["world/robot/frames/5"], "Transform3D:translation", "time")
+    assert len(t) == 1000
+    assert path.stat().st_size < 5e6
+
+
+def test_hexapod_like_recording_stays_under_20_mb(tmp_path: Path) -> None:
+    """18 joints × 20 000 samples, 6 baselines, a 300-point front over 100 generations."""
+    path = tmp_path / "hexa.rrd"
+    motion = hexapod_like_motion(K=20_000)
+    res = fake_result(
+        motion,
+        generations=100,
+        front_size=300,
+        baselines={f"paper_{c}": hexapod_like_motion(K=20_000) for c in "abcdef"},
+    )
+    rng = np.random.default_rng(4)
+    fronts = {g: rng.random((300, 3)) for g in range(1, 101)}
+    t0 = time.perf_counter()
+    W.write_recording(res, path, fronts=fronts)
+    elapsed = time.perf_counter() - t0
+    size = path.stat().st_size
+    assert size <= 20e6, f"{size / 1e6:.1f} MB"
+    assert elapsed < 30
+    rec = R.record_run(res, fronts=fronts)
+    assert rec.properties["max_samples_best"] == 2000  # the baselines gave way first
+    assert R.MIN_SAMPLES <= rec.properties["max_samples_baselines"] < 2000
+    assert any("display caps lowered" in n for n in rec.notes)
+    assert abs(rec.properties["estimated_bytes"] - size) < 0.25 * size
+    ents = read_back(path)
+    g, pts = column(ents["optimization/front"], "Points3D:positions", "generation")
+    assert len(g) == 100 and all(len(p) == 300 for p in pts)
+    t, _ = column(ents["world/robot/L6/frames/3"], "Transform3D:translation", "time")
+    assert len(t) == 2000
+    assert "world/robot/body" in ents and "world/scene/ground" in ents
+
+
+# ---------------------------------------------------------------------------------------------
+# merge
+# ---------------------------------------------------------------------------------------------
+
+
+def test_merge_recordings(tmp_path: Path) -> None:
+    a, b = tmp_path / "a.rrd", tmp_path / "b.rrd"
+    W.write_recording(fake_result(arm_motion(K=300), generations=4), a, recording_id="job-a")
+    W.write_recording(fake_result(arm_motion(K=700), generations=6), b, recording_id="job-b")
+    out = tmp_path / "sweep" / "merged.rrd"
+    W.merge_recordings([a, b], out, ["seed 1", "seed-2"], recording_id="sweep-1")
+    reader = RrdReader(out)
+    (store,) = reader.recordings()
+    assert store.recording_id == "sweep-1" and len(reader.blueprints()) == 1
+    ents = read_back(out)
+    assert "jobs/seed_1/signals/q/q1" in ents and "jobs/seed-2/signals/q/q1" in ents
+    assert "jobs/seed_1/world/robot/frames/2/link" in ents
+    assert not any(e.startswith(("signals", "world", "jobs/seed_1/__")) for e in ents)
+    t1, _ = column(ents["jobs/seed_1/signals/q/q1"], "Scalars:scalars", "time")
+    t2, _ = column(ents["jobs/seed-2/signals/q/q1"], "Scalars:scalars", "time")
+    assert (len(t1), len(t2)) == (300, 700)
+    g, _ = column(ents["jobs/seed-2/optimization/front"], "Points3D:positions", "generation")
+    assert list(g) == [6]
+    with pytest.raises(ValueError, match="names"):
+        W.merge_recordings([a, b], out, ["only one"])
+
+
+def views(container: object) -> list[tuple[str, str, str]]:
+    """(view class, origin, name) of every view under a blueprint container, depth first."""
+    out: list[tuple[str, str, str]] = []
+    for c in getattr(container, "contents", []):
+        if hasattr(c, "origin"):
+            out.append((type(c).__name__, str(c.origin), str(c.name)))
+        else:
+            out.extend(views(c))
+    return out
+
+
+def test_blueprint_views() -> None:
+    res = fake_result(arm_motion(K=50), baselines={"p": arm_motion(K=50)})
+    bp = W.blueprint_for(R.record_run(res))
+    v = views(bp.root_container)
+    assert ("Spatial3DView", "world", "robot, path and scene") in v
+    assert ("Spatial3DView", "optimization", "Pareto front") in v
+    origins = {o for kind, o, _ in v if kind == "TimeSeriesView"}
+    assert {"signals/q", "signals/qd", "signals/tau", "signals/power", "signals/energy"} <= origins
+    assert {"optimization/best", "baselines/p/signals/q"} <= origins
+    # a merged recording: one set of views per job plus the overlays
+    ents = {f"jobs/{j}/{e}": set() for j in ("a", "b") for e in R.record_run(res).entity_paths()}
+    ents["jobs/a/optimization/front"] = ents["jobs/b/optimization/front"] = {
+        "rerun.archetypes.Points3D"
+    }
+    v = views(W.blueprint_for(ents, jobs=["a", "b"]).root_container)
+    names = {n for _, _, n in v}
+    assert {"Pareto fronts, all jobs", "energy (J), all jobs", "a: q (rad)", "b: q (rad)"} <= names
+
+
+# ---------------------------------------------------------------------------------------------
+# replay
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.filterwarnings("ignore:RRD file has no footer")  # the saved copy of the live stream
+def test_serve_web_answers_200_on_localhost_and_serves_the_data(
+    written: tuple, tmp_path: Path
+) -> None:
+    path, _, _ = written
+    with W.serve_web(path, None, timeout=20) as viewer:
+        assert viewer.url is not None and viewer.url.startswith("http://127.0.0.1:")
+        r = httpx.get(viewer.url, timeout=5)
+        assert r.status_code == 200
+        assert "text/html" in r.headers["content-type"] and "rerun" in r.text.lower()
+        # a late client receives the pushed recording from the server
+        grpc = httpx.URL(viewer.url).params["url"]
+        got = tmp_path / "got.rrd"
+        saver = subprocess.Popen(
+            [W.rerun_binary(), "--connect", grpc, "--save", str(got)],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        try:
+            deadline, last = time.monotonic() + 15, -1
+            while time.monotonic() < deadline:
+                time.sleep(0.5)
+                size = got.stat().st_size if got.exists() else 0
+                if size > 0 and size == last:
+                    break
+                last = size
+        finally:
+            saver.terminate()
+            saver.wait(10)
+        assert "signals/q/q1" in W.read_entities(got)
+    assert viewer.process.poll() is not None  # stopped
+
+
+def test_serve_web_on_a_busy_port_fails_clearly(written: tuple) -> None:
+    path, _, _ = written
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        with pytest.raises(RuntimeError, match="already in use"):
+            W.serve_web(path, busy.getsockname()[1], timeout=10)
+
+
+def test_open_viewer_without_display_uses_the_web_viewer(
+    written: tuple, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path, _, _ = written
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr(W.sys, "platform", "linux")
+    assert not W.has_display()
+    port = W._free_port()
+    with W.open_viewer(path, port=port) as viewer:
+        assert viewer.url is not None and f":{port}/" in viewer.url
+        assert httpx.get(viewer.url, timeout=5).status_code == 200
+    with pytest.raises(FileNotFoundError):
+        W.open_viewer(path.with_name("missing.rrd"))
+
+
+# ---------------------------------------------------------------------------------------------
+# the example studies, end to end
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("spec_path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_example_spec_recording(spec_path: Path, tmp_path: Path) -> None:
+    from legcore.runner import run
+
+    spec = yaml.safe_load(spec_path.read_text())
+    spec["budget"] = {"generations": 2}
+    fronts: dict[int, np.ndarray] = {}
+    res = run(spec, callback=lambda p: fronts.__setitem__(p.generation, p.front_F.copy()))
+    path = tmp_path / "rec.rrd"
+    W.write_recording(res, path, recording_id="ex", fronts=fronts)
+    assert path.stat().st_size < 20e6
+    ents = read_back(path)
+    motion = res.best.motion
+    part = R.entity_part(motion.joint_names[-1])
+    t, vals = column(ents[f"signals/q/{part}"], "Scalars:scalars", "time")
+    assert len(t) == min(motion.n_samples, len(t)) and 0 < len(t) <= 2000
+    k = np.searchsorted(motion.t, t - 1e-12)
+    np.testing.assert_array_equal([v[0] for v in vals], motion.q[k, -1])
+    assert any("/frames/" in e for e in ents)
+    assert "optimization/front_size" in ents
+    if len(res.objective_names) > 1:
+        comp = "Points3D:positions" if len(res.objective_names) > 2 else "Points2D:positions"
+        g, pts = column(ents["optimization/front"], comp, "generation")
+        assert list(g) == sorted(fronts)  # (an empty front is logged too: nothing feasible yet)
+        assert [len(p) for p in pts] == [len(fronts[k]) for k in sorted(fronts)]
+    for name in res.baselines:
+        if res.baselines[name].motion is not None:
+            assert f"baselines/{R.entity_part(name)}/signals/q/{part}" in ents
