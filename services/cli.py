@@ -1,6 +1,6 @@
 """The `legopt` command line.
 
-    legopt run SPEC.yaml --out DIR     run one job in-process, print the result, write DIR/result.json
+    legopt run SPEC.yaml --out DIR     run one job in-process, print it, write DIR/result.json
     legopt db upgrade                  create / migrate the database (Alembic)
     legopt serve                       API + N worker processes on the embedded default
     legopt worker                      one Celery worker process
@@ -34,7 +34,7 @@ app = typer.Typer(
 db_app = typer.Typer(help="Database schema (Alembic).", no_args_is_help=True)
 app.add_typer(db_app, name="db")
 
-console = Console()
+console = Console(width=None if sys.stdout.isatty() else 160)
 err_console = Console(stderr=True)
 
 
@@ -64,7 +64,9 @@ def load_spec_file(path: Path) -> dict[str, Any]:
     except yaml.YAMLError as exc:
         raise bad_input(f"SPEC: {path} is not valid YAML/JSON: {exc}") from None
     if not isinstance(data, dict):
-        raise bad_input(f"SPEC: {path} must contain a mapping (the job spec), not {type(data).__name__}")
+        raise bad_input(
+            f"SPEC: {path} must contain a mapping (the job spec), not {type(data).__name__}"
+        )
     return data
 
 
@@ -110,7 +112,9 @@ def print_result(result: Any) -> None:
     if best.table:
         print_joint_table(best.table)
     if len(result.pareto) > 1:
-        console.print(f"Pareto front: {len(result.pareto)} points ({', '.join(result.objective_names)})")
+        console.print(
+            f"Pareto front: {len(result.pareto)} points ({', '.join(result.objective_names)})"
+        )
 
 
 def print_joint_table(rows: list[dict[str, Any]], title: str = "per-joint metrics") -> None:
@@ -125,7 +129,9 @@ def print_joint_table(rows: list[dict[str, Any]], title: str = "per-joint metric
     for row in rows:
         vals = list(row.get("values") or [])
         cells = [_fmt(v) for v in vals] + [""] * (n - len(vals))
-        jt.add_row(str(row.get("metric", "")), str(row.get("unit", "")), *cells, _fmt(row.get("total")))
+        jt.add_row(
+            str(row.get("metric", "")), str(row.get("unit", "")), *cells, _fmt(row.get("total"))
+        )
     console.print(jt)
 
 
@@ -161,8 +167,11 @@ def run(
         disable=quiet,
     ) as bar:
         task = bar.add_task(spec.problem.kind, total=total, best="")
+        fronts: dict[int, Any] = {}
         while not r.done:
             p = r.step()
+            if p.front_F.ndim == 2 and p.front_F.shape[1] > 1 and len(p.front_F):
+                fronts[p.generation] = p.front_F.copy()
             best = ", ".join(f"{v:.5g}" for v in p.best_f)
             bar.update(task, completed=p.generation, best=f"best [{best}]")
     result = finalize(prepared, r.result())
@@ -171,16 +180,16 @@ def run(
     (out / "result.json").write_text(json.dumps(result.to_dict(), indent=1, allow_nan=False))
     console.print(f"wrote {out / 'result.json'}")
     if spec.record:
-        _record(result, out / "recording.rrd")
+        _record(result, out / "recording.rrd", fronts or None)
 
 
-def _record(result: Any, path: Path) -> None:
+def _record(result: Any, path: Path, fronts: dict[int, Any] | None = None) -> None:
     try:
         from services.worker.rerun_writer import write_recording
     except ImportError:
         return
     try:
-        write_recording(result, path)
+        write_recording(result, path, fronts=fronts)
     except Exception as exc:  # a recording failure never fails the run
         err_console.print(f"[yellow]warning:[/] recording failed: {type(exc).__name__}: {exc}")
         return
@@ -304,7 +313,9 @@ def submit(
 
 @app.command()
 def status(
-    job_id: Annotated[str | None, typer.Argument(metavar="JOB", help="job id (all if omitted)")] = None,
+    job_id: Annotated[
+        str | None, typer.Argument(metavar="JOB", help="job id (all if omitted)")
+    ] = None,
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:
@@ -343,7 +354,9 @@ def results(
 
 @app.command()
 def sweep(
-    sweep_path: Annotated[Path, typer.Argument(metavar="SWEEP", help="sweep doc: base + grid/list/seeds")],
+    sweep_path: Annotated[
+        Path, typer.Argument(metavar="SWEEP", help="sweep doc: base + grid/list/seeds")
+    ],
     wait: Annotated[bool, typer.Option("--wait", help="wait and print the table")] = False,
     url: UrlOpt = None,
     key: KeyOpt = None,
@@ -381,10 +394,15 @@ def replay(
     elif save is not None:
         save.write_bytes(path.read_bytes())
         path = save
-    if web:
-        rerun_writer.serve_web(path, port=port)
-    else:
-        rerun_writer.open_viewer(path)
+    handle = rerun_writer.open_viewer(path, web=True if web else None, port=port)
+    if handle.url:
+        console.print(f"Rerun web viewer: {handle.url}  (Ctrl-C to stop)")
+    try:
+        handle.wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        handle.stop()
 
 
 def _job_kind(job: dict[str, Any]) -> str:

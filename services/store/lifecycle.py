@@ -188,9 +188,13 @@ def record_generation(
     best: Any,
     wall_time_s: float,
     hypervolume: float | None = None,
+    front: Any = None,
     now: datetime | None = None,
 ) -> bool:
     """Record one generation and advance the job's progress; idempotent per generation.
+
+    ``front`` (optional, JSON) is the objective vectors of the current front, kept for the
+    recording's per-generation Pareto view.
 
     ``best`` is the best objective(s) so far (a number or a list, JSON); it also becomes the
     job's ``best_objective`` unless a later generation was already recorded. A generation that
@@ -217,6 +221,7 @@ def record_generation(
             "hypervolume": _finite_or_none(hypervolume),
             "wall_time_s": float(wall_time_s),
             "created_at": now,
+            "front": front,
         },
         ("job_id", "generation"),
     )

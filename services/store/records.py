@@ -108,6 +108,7 @@ class GenerationRecord:
     hypervolume: float | None
     wall_time_s: float
     created_at: datetime
+    front: Any = None  # objective vectors of the front at this generation (may be thinned)
 
 
 @dataclass(frozen=True, slots=True)

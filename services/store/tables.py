@@ -194,6 +194,7 @@ class Generation(Base):
     hypervolume: Mapped[float | None] = mapped_column(Float)
     wall_time_s: Mapped[float] = mapped_column(Float)
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
+    front: Mapped[Any | None] = mapped_column(JSONValue(), default=None)
 
 
 class Checkpoint(Base):

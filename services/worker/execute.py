@@ -170,6 +170,7 @@ def _run_claimed(job: JobRecord, wid: str, settings: Settings, beat: _Heartbeat)
                 n_evals=progress.n_evals,
                 best=[float(v) for v in progress.best_f],
                 wall_time_s=time.perf_counter() - t0,
+                front=_thin_front(progress.front_F),
             )
             if run.done or progress.generation % settings.checkpoint_every == 0:
                 blob = json.dumps(to_jsonable(run.state_dict()), allow_nan=False).encode()
@@ -189,6 +190,43 @@ def _run_claimed(job: JobRecord, wid: str, settings: Settings, beat: _Heartbeat)
         )
     _store_result(job_id, wid, settings, result, notes)
     return Outcome(job_id, "succeeded", resumed_from)
+
+
+MAX_FRONT_POINTS = 300
+
+
+def _thin_front(F: Any) -> list[list[float]] | None:
+    """The objective vectors of a front, at most ``MAX_FRONT_POINTS`` (evenly strided), or None
+    for a single-objective run (its front is just the best point)."""
+    import numpy as np
+
+    F = np.asarray(F, dtype=float)
+    if F.ndim != 2 or F.shape[1] < 2 or F.shape[0] == 0:
+        return None
+    if F.shape[0] > MAX_FRONT_POINTS:
+        F = F[np.linspace(0, F.shape[0] - 1, MAX_FRONT_POINTS).round().astype(int)]
+    F = np.where(np.isfinite(F), F, np.nan)
+    return [[None if v != v else float(v) for v in row] for row in F]  # type: ignore[misc]
+
+
+def _fronts_from_store(job_id: str) -> dict[int, Any] | None:
+    """{generation: F} of every recorded generation that has a front (across resumes)."""
+    import numpy as np
+
+    from services.store.repository import list_generations
+
+    fronts: dict[int, Any] = {}
+    after: int | None = None
+    with session_scope() as s:
+        while True:
+            rows = list_generations(s, job_id, after=after, limit=1000)
+            for g in rows:
+                if g.front:
+                    fronts[g.generation] = np.asarray(g.front, dtype=float)
+            if len(rows) < 1000:
+                break
+            after = rows[-1].generation
+    return fronts or None
 
 
 def _store_result(
@@ -229,9 +267,7 @@ def _store_result(
                     "history": doc["history"],
                 },
             ),
-            pareto=[
-                ParetoPointIn(i, p["x"], p["objectives"]) for i, p in enumerate(doc["pareto"])
-            ],
+            pareto=[ParetoPointIn(i, p["x"], p["objectives"]) for i, p in enumerate(doc["pareto"])],
             baselines=[BaselineIn(name, b) for name, b in doc["baselines"].items()],
             artifacts=artifacts,
             warnings=warnings,
@@ -247,7 +283,7 @@ def _write_recording(job_id: str, result: RunResult, store: ArtifactStore) -> Ar
     try:
         with tempfile.TemporaryDirectory(prefix="legopt-rrd-") as tmp:
             path = Path(tmp) / "recording.rrd"
-            write_recording(result, path, recording_id=job_id)
+            write_recording(result, path, recording_id=job_id, fronts=_fronts_from_store(job_id))
             return ArtifactIn("recording", *store.put(job_id, "recording", path))
     except Exception as exc:
         log.warning("job %s: recording failed: %s", job_id, traceback.format_exc())
