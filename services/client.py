@@ -1,9 +1,9 @@
 """A small HTTP client of the LegOpt API (used by the CLI, the demo and the integration tests).
 
-    c = Client.from_env()             # LEGOPT_API_URL, LEGOPT_API_KEY or ./legopt-data/api-key
-    job = c.submit(spec)              # {"id": ..., "status": "queued", ...}
-    job = c.wait(job["id"])           # polls until succeeded | failed | cancelled
-    c.result(job["id"]); c.pareto(job["id"]); c.recording(job["id"])
+c = Client.from_env()             # LEGOPT_API_URL, LEGOPT_API_KEY or ./legopt-data/api-key
+job = c.submit(spec)              # {"id": ..., "status": "queued", ...}
+job = c.wait(job["id"])           # polls until succeeded | failed | cancelled
+c.result(job["id"]); c.pareto(job["id"]); c.recording(job["id"])
 """
 
 from __future__ import annotations
@@ -122,6 +122,11 @@ class Client:
 
     def sweep(self, doc: dict[str, Any]) -> dict[str, Any]:
         return dict(self.post("/sweeps", doc))
+
+    def sweep_recording(self, sweep_id: str, jobs: list[str] | None = None) -> bytes:
+        """One .rrd merging the chosen jobs of a sweep (default: all with a recording)."""
+        params = {"jobs": jobs} if jobs else None
+        return self._req("GET", f"/sweeps/{sweep_id}/recording", params=params).content
 
     def get_sweep(self, sweep_id: str) -> dict[str, Any]:
         return dict(self.get(f"/sweeps/{sweep_id}"))

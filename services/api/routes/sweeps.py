@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Response, status
+from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse
+from starlette.background import BackgroundTask
 
 from services.api.deps import Context, CurrentKey, Pagination
 from services.api.errors import MAX_ERRORS, invalid, not_found, validation_error
@@ -203,4 +208,74 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
         columns=columns,
         objective_names=names,
         table=Page[SweepRow](items=rows, total=total, limit=page.limit, offset=page.offset),
+    )
+
+
+MAX_MERGED_JOBS = 32
+
+
+@router.get(
+    "/sweeps/{sweep_id}/recording",
+    response_class=FileResponse,
+    summary="One Rerun recording merging chosen jobs of a sweep, side by side",
+    responses={
+        200: {"content": {"application/octet-stream": {}}, "description": "The merged .rrd."},
+        **_404,
+        422: {"model": ErrorOut, "description": "A chosen job is not in the sweep."},
+    },
+)
+def get_sweep_recording(
+    sweep_id: str,
+    key: CurrentKey,
+    ctx: Context,
+    jobs: Annotated[
+        list[str] | None,
+        Query(description="Job ids to merge (default: every succeeded job with a recording)."),
+    ] = None,
+) -> FileResponse:
+    """Each job's recording under ``/jobs/<n>_<job id prefix>/…`` in one file, with a blueprint
+    overlaying the fronts, energies and best objectives (``rerun FILE.rrd``)."""
+    with ctx.read() as session:
+        sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
+        if sweep is None:
+            raise not_found("sweep", sweep_id)
+        members = repo.list_jobs(
+            session, owner_key_id=key.id, sweep_id=sweep.id, limit=1000, offset=0
+        ).items
+        by_id = {j.id: j for j in members}
+        chosen = list(jobs) if jobs else [j.id for j in reversed(members)]
+        unknown = [j for j in chosen if j not in by_id]
+        if unknown:
+            raise invalid(("query", "jobs"), f"not jobs of sweep {sweep.id}: {', '.join(unknown)}")
+        artifacts = []
+        for job_id in chosen:
+            art = repo.get_artifact(session, job_id, "recording")
+            if art is not None:
+                artifacts.append((job_id, art))
+            elif jobs:
+                raise invalid(("query", "jobs"), f"job {job_id} has no recording (yet)")
+    if not artifacts:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"sweep {sweep.id} has no recordings yet")
+    if len(artifacts) > MAX_MERGED_JOBS:
+        raise invalid(
+            ("query", "jobs"),
+            f"at most {MAX_MERGED_JOBS} jobs per merged recording, got {len(artifacts)}: "
+            "choose them with ?jobs=…",
+        )
+    from services.worker.rerun_writer import merge_recordings
+
+    store = ctx.artifacts
+    paths = []
+    for _, art in artifacts:
+        store.verify(art.relative_path, art.sha256)
+        paths.append(store.path(art.relative_path))
+    names = [f"{i + 1}_{job_id[:8]}" for i, (job_id, _) in enumerate(artifacts)]
+    tmpdir = Path(tempfile.mkdtemp(prefix="legopt-merge-"))
+    out = tmpdir / f"sweep-{sweep.id}.rrd"
+    merge_recordings(paths, out, names)
+    return FileResponse(
+        out,
+        media_type="application/octet-stream",
+        filename=out.name,
+        background=BackgroundTask(shutil.rmtree, tmpdir, ignore_errors=True),
     )
