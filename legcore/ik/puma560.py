@@ -224,7 +224,7 @@ def puma560_ik(
         hi = np.asarray(q_max, dtype=float)
         within = reach & np.all((out >= lo - 1e-12) & (out <= hi + 1e-12), axis=-1)
     else:
-        out = wrap_to_limits(out, np.full(6, -math.pi), np.full(6, math.pi))
+        out = out - 2.0 * math.pi * np.ceil((out - math.pi) / (2.0 * math.pi))  # (−π, π]
         within = reach.copy()
     return Puma560Solutions(
         q=out.reshape(*batch, 8, 6),
