@@ -1,0 +1,721 @@
+"""``swing_energy`` — seed 000: GA energy optimisation of a walking-robot leg's transfer phase.
+
+Calderón, Bedolla & Szwedowicz (2015). One 3-DOF leg (``calderon_leg``: hip yaw + two pitch
+joints, seed 000 Table 1) swings freely (open chain) from a start to an end configuration in
+``T`` = 3 s. See ``docs/studies/000_swing_energy.md`` for the paper's tables beside ours.
+
+Genes
+    ``x`` (3·K_via,) rad, via-point-major (``x[3 j + i]`` belongs to joint ``i`` at intermediate via
+    point ``j``, K_via = 10); every entry is an integer gene ``k`` times the control resolution
+    (0.00174 rad), and every via point it decodes to is a multiple of the resolution too, as are
+    the start and end configurations — every trajectory is reachable by the controller.
+    Two encodings (``encoding``):
+
+    - ``"deviation"`` (default): the via point is the coordinated motion's via point (on the
+      grid) plus the gene's excess over a dead band, ``v = c + sign(k)·max(|k| − D, 0)`` steps,
+      with ``D = dead_band × W`` and ``|v − c| ≤ W = search_range`` per joint. With
+      ``lift_only`` the two pitch joints deviate only in the direction that lifts the foot (the
+      sign of ∂z_foot/∂q_i at the start; below the coordinated motion the foot would enter the
+      ground); the yaw joint deviates both ways. Default W = (0.05, 0.3, 0.4) rad (the knee's
+      range is larger: its lever arm to the foot is 2/3 of the hip pitch's), D = 2 W.
+    - ``"absolute"``: the gene *is* the via-point angle, ``v = k`` steps, in the tube
+      ``c ± W`` around the coordinated motion (one-sided for the lifting joints with
+      ``lift_only``) — the seed's literal coding.
+
+    Why "deviation": with absolute genes the seed's GA (fresh-value mutation, one-gene blend)
+    cannot make a joint exactly still — f_d and f_a reward stillness only when all ten genes of
+    the joint agree — and at 100 × 100 it ends at a score ≈ 2.4 (0.2–0.4 J) in both cases (10
+    seeds). With the dead band an unmutated gene reproduces the coordinated motion, a fresh gene
+    does so with probability 2/3, and the GA reaches 9.68 (flat, 10/10 seeds) / 7.50 (box, 8/10
+    seeds) — see ``docs/studies/000_swing_energy.md``.
+
+Trajectory
+    The joint trajectory passes through start, the K_via via points and end at the equally spaced
+    times ``t_j = j T / (K_via + 1)``: a C² cubic spline, clamped (q̇ = 0 at both ends) —
+    :class:`~legcore.trajectories.ViaPointSpline` ``kind="cubic"`` (the seed does not name its
+    interpolation; the cubic is the lowest order with continuous acceleration, which eq 5 needs,
+    and its jerk is finite). It is sampled every ``dt`` (0.01 s → K = 301 samples). The spline is
+    linear in the via points, so the population is evaluated as one matrix product
+    (:func:`~legcore.problems.swing_energy_geometry.via_basis`).
+
+Objective (seed eqs 1–5), to MAXIMISE, best = 10 (reported as ``score``; F = −score)::
+
+    score = w1 f_d + w2 f_a,     w1 = w2 = 5
+    f_d = Σ_i w_{d,i} r(θ_{i,min}, θ_{i,T}),   θ_{i,min} = |q_{i,end} − q_{i,start}|   (eqs 2–3)
+                                                θ_{i,T}   = Σ_k |q_{i,k} − q_{i,k−1}|     (eq 4)
+    f_a = Σ_i w_{a,i} r(AcC_{i,max}, Ac_{i,max}),  Ac = max_k |q̈_{i,k}|                  (eq 5)
+    r(a, b) = min(1, (a + ε) / (b + ε)),   w_d = w_a = (0.25, 0.5, 0.25)
+
+- θ_{i,T} is summed over the K time samples (the "divisions" of eq 4), so spline overshoot
+  between via points counts as motion.
+- AcC (the "coordinated trajectory between the initial and final positions"): the rest-to-rest
+  cubic ``q_s + Δq (3τ² − 2τ³)`` (the spline through no intermediate point: all joints start and
+  stop together), characterised like every candidate — its values at the via-point times rounded
+  to the grid, through the same spline. AcC_1 = 0.492 rad/s² (the exact cubic's 6|Δq|/T² is
+  0.430; rounding the via points adds the rest), and for the joint that moves 2 steps the goal
+  is the grid staircase's 0.052 rad/s², which a candidate can reach (the exact cubic's
+  0.0023 rad/s² cannot be reached on the grid). The coordinated motion therefore scores
+  f_a = 1 and the best score 10 is attainable, as the seed intends.
+- ``min(1, ·)``: the seed's goal programming ("the maximum value of f_a and f_d is one"). f_d ≤ 1
+  anyway; for f_a, a trajectory whose peak acceleration is below the coordinated one meets the
+  goal and gets 1.
+- ε (``ratio_eps`` resolution steps; 1 by default; ε_d = ratio_eps·resolution,
+  ε_a = ratio_eps·6·resolution/T²) handles a joint that does not move: 0/0 → 1 (still joint =
+  goal met). With ε = 0 the ratios are exactly eqs 2 and 5 with 0/0 := 1, but a joint whose start
+  and end coincide then scores 0 for *any* motion, however small, and the GA has no slope towards
+  keeping it still; ε gives it one (a joint that moves one step out and back scores 1/3). For
+  joint 1 (371 steps) ε changes the ratio by < 0.3 %.
+
+Constraints (G ≤ 0)
+    ``ground``: every joint origin and the foot stay above the ground (the plane of the lower of
+    the start/end feet) minus ``ground_tolerance`` (1 mm) — G is the depth below it (m).
+    ``obstacle``: the box (60 × 40 × 26 mm by default, length along the step, on the ground,
+    centred on the midpoint of the start→end foot chord), grown by ``margin`` (2 mm), is entered
+    by no link segment (hip→knee→foot, tested exactly by the slab method at every sample) — G is the
+    penetration depth (m, :func:`~legcore.problems.swing_energy_geometry.chain_clearance`).
+    The default optimiser handles them with a static penalty of 300 per metre (1 mm of
+    penetration costs 0.3 score points): with Deb's feasibility rule the GA settles on the first
+    feasible (hip-pitch) lift and never finds the knee lift the score prefers.
+
+Start and end (derived; the seed gives neither, see the docs for the fit)
+    start = (−185, 384, −782) steps, end = (186, 384, −780) steps of 0.00174 rad, i.e.
+    q_start = (−0.3219, 0.6682, −1.3607) rad, q_end = (0.3236, 0.6682, −1.3572) rad.
+    Joint 1 travels 371 steps = 0.6455 rad (Tables 2–5: 0.6458 = 37.0°); joint 3 differs by
+    2 steps so that the minimum total displacement is 0.6490 rad (Table 3: 0.6493); the posture
+    (femur 38.3° up, shank 39.7° below horizontal) reproduces Table 2's static torques
+    (0.1767 / 0.0861 N·m vs 0.1765 / 0.0862) and the parabolic baseline's joint travel (1.19 /
+    0.57 rad vs 1.2007 / 0.5655); the feet are 0.152 m apart (baseline step 0.156 m) and the
+    pure-yaw foot arc is 0.1546 m (Table 3 D = 0.1532 m).
+
+Baselines (``baseline_solutions``): the parabolic swing (Calderón 2008) and the shortest foot
+path (Shankar & Kaur 2011) are constructions; minimum θ_T (Tian & Collins 2004), the
+multi-criteria sum (Solteiro 2007) and minimum energy (Pérez 2010) are this GA with that
+criterion in place of the score (``baseline_generations``, fixed ``baseline_seed``) — see
+:mod:`legcore.problems.swing_energy_baselines`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from legcore.dynamics import inverse_dynamics
+from legcore.energy import mechanical_energy
+from legcore.joint_metrics import joint_metrics
+from legcore.kinematics import fk, frames, ik, jacobian
+from legcore.problems.study import Box, Motion, Solution, Study, StudyParams, StudyProblem
+from legcore.problems.swing_energy_geometry import (
+    chain_clearance,
+    point_box_distance,
+    via_basis,
+)
+from legcore.robots.model import Robot
+from legcore.trajectories import ViaPointSpline, time_grid
+
+__all__ = [
+    "BASELINES",
+    "CRITERIA",
+    "DEFAULT_END_STEPS",
+    "DEFAULT_END_STEPS_OBSTACLE",
+    "DEFAULT_START_STEPS",
+    "RESOLUTION",
+    "STUDY",
+    "Obstacle",
+    "Params",
+    "SwingEnergyProblem",
+    "build",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: Seed 000's control resolution (rad) — genes are integer multiples of it.
+RESOLUTION = 0.00174
+#: Derived start/end configurations in resolution steps (see the module docstring); the end of
+#: case 2 (obstacle) keeps joint 3 where it started (Tables 4-5: Solteiro's θ3 = 0).
+DEFAULT_START_STEPS = (-185, 384, -782)
+DEFAULT_END_STEPS = (186, 384, -780)
+DEFAULT_END_STEPS_OBSTACLE = (186, 384, -782)
+
+#: What a problem minimises: the seed's score (as −score) or one literature criterion.
+CRITERIA = ("score", "theta_total", "foot_distance", "multi_criteria", "energy")
+
+#: Baseline name → (criterion it optimises, reference in seed 000).
+BASELINES: dict[str, tuple[str, str]] = {
+    "calderon2008_parabolic": ("parabolic", "Calderón 2008: parabolic swing 0.156 × 0.065 m"),
+    "tian_collins2004_min_displacement": (
+        "theta_total", "Tian & Collins 2004: minimum total angular displacement"),
+    "shankar_kaur2011_min_distance": (
+        "foot_distance", "Shankar & Kaur 2011: shortest foot (end-effector) path"),
+    "solteiro2007_multi_criteria": (
+        "multi_criteria",
+        "Solteiro 2007: displacement + foot distance + foot and joint speeds + energy"),
+    "perez2010_min_energy": ("energy", "Pérez 2010: minimum mechanical energy"),
+}
+BaselineName = Literal[
+    "calderon2008_parabolic",
+    "tian_collins2004_min_displacement",
+    "shankar_kaur2011_min_distance",
+    "solteiro2007_multi_criteria",
+    "perez2010_min_energy",
+]
+Vec3 = tuple[float, float, float]
+
+# Values below these are exact zeros (float noise of the spline basis): rad, rad/s².
+_ZERO_THETA = 1e-12
+_ZERO_ACC = 1e-9
+
+
+class Obstacle(BaseModel):
+    """A box on the ground, mid-stride (seed 000 case 2: 60 × 40 × 26 mm).
+
+    ``length`` along the step, ``width`` across it, ``height`` (m). Its centre lies on the
+    start→end foot chord at the fraction ``along`` (0.5: "halfway between the initial and final
+    points", seed 000 §5.2), shifted ``lateral`` m horizontally to the left of the step
+    direction; its base is on the ground. The box is axis-aligned: its length is laid along the
+    world axis (x or y) nearest the step direction.
+    ``margin`` (m): the links and foot must stay this far out of it (link thickness).
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    length: float = Field(default=0.060, gt=0.0, le=2.0)
+    width: float = Field(default=0.040, gt=0.0, le=2.0)
+    height: float = Field(default=0.026, gt=0.0, le=2.0)
+    along: float = Field(default=0.5, ge=0.0, le=1.0)
+    lateral: float = Field(default=0.0, ge=-2.0, le=2.0)
+    margin: float = Field(default=0.002, ge=0.0, le=0.5)
+
+
+class Params(StudyParams):
+    """Parameters of the ``swing_energy`` study; defaults are seed 000's settings (units s, rad, m).
+
+    - ``T`` swing time (3 s), ``n_via`` intermediate via points (10), ``dt`` sampling step
+      (0.01 s; T must be a whole number of steps), ``resolution`` control resolution (0.00174).
+    - ``q_start``/``q_end`` (rad) or ``foot_start``/``foot_end`` (m, hip frame; IK branch
+      nearest the default posture) replace the derived start/end; rounded to the grid.
+    - ``w1``, ``w2`` criterion weights (5, 5); ``w_d``, ``w_a`` link weights (0.25, 0.5, 0.25);
+      ``ratio_eps`` ε of the ratios in resolution steps (1; 0 = eqs 2/5 with 0/0 := 1).
+    - ``obstacle``: False (flat ground, case 1), True (the seed's 60 × 40 × 26 mm box
+      mid-stride, case 2) or an :class:`Obstacle`. ``ground``/``ground_tolerance``: keep the
+      leg above the ground (1 mm tolerance).
+    - ``encoding``, ``search_range`` (per joint, rad), ``dead_band`` (× search_range),
+      ``lift_only``: the gene coding (module docstring, "Genes").
+    - ``step_height``: apex of the parabolic baseline (0.065 m). ``baselines``: which baselines
+      to compute (all five); ``baseline_generations``/``baseline_pop_size``/``baseline_seed``:
+      the GA budget and seed of the GA baselines (100 × 100, seed 0).
+    """
+
+    kind: Literal["swing_energy"] = "swing_energy"
+    T: float = Field(default=3.0, gt=0.0, le=60.0, description="swing duration, s")
+    n_via: int = Field(default=10, ge=1, le=40, description="intermediate via points")
+    dt: float = Field(default=0.01, gt=0.0, le=1.0, description="sampling step, s")
+    resolution: float = Field(default=RESOLUTION, gt=0.0, le=0.1, description="rad")
+    q_start: Vec3 | None = None
+    q_end: Vec3 | None = None
+    foot_start: Vec3 | None = None
+    foot_end: Vec3 | None = None
+    w1: float = Field(default=5.0, ge=0.0, le=1e3)
+    w2: float = Field(default=5.0, ge=0.0, le=1e3)
+    w_d: Vec3 = (0.25, 0.5, 0.25)
+    w_a: Vec3 = (0.25, 0.5, 0.25)
+    ratio_eps: float = Field(default=1.0, ge=0.0, le=1e3, description="ε in resolution steps")
+    obstacle: bool | Obstacle = False
+    ground: bool = True
+    ground_tolerance: float = Field(default=0.001, ge=0.0, le=1.0, description="m")
+    encoding: Literal["deviation", "absolute"] = "deviation"
+    search_range: Vec3 = (0.05, 0.3, 0.4)
+    dead_band: float = Field(default=2.0, ge=0.0, le=100.0, description="× search_range")
+    lift_only: bool = True
+    step_height: float = Field(default=0.065, ge=0.0, le=1.0, description="m")
+    baselines: tuple[BaselineName, ...] = (
+        "calderon2008_parabolic",
+        "tian_collins2004_min_displacement",
+        "shankar_kaur2011_min_distance",
+        "solteiro2007_multi_criteria",
+        "perez2010_min_energy",
+    )
+    baseline_generations: int = Field(default=100, ge=1, le=1000)
+    baseline_pop_size: int = Field(default=100, ge=4, le=2000)
+    baseline_seed: int = Field(default=0, ge=0, le=2**32 - 1)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Params:
+        if any(not math.isfinite(v) or v < 0.0 or v > 2 * math.pi for v in self.search_range):
+            raise ValueError(f"search_range: per-joint ranges must be in [0, 2π] rad, "
+                             f"got {self.search_range}")
+        for name in ("w_d", "w_a"):
+            w = getattr(self, name)
+            if any(not math.isfinite(v) or v < 0.0 for v in w):
+                raise ValueError(f"{name}: link weights must be finite and >= 0, got {w}")
+        if self.w1 + self.w2 <= 0.0:
+            raise ValueError("w1, w2: at least one criterion weight must be > 0")
+        steps = self.T / self.dt
+        if abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
+            raise ValueError(f"dt: T = {self.T} s must be a whole number of steps dt = {self.dt} s")
+        if round(steps) + 1 > 6001:
+            raise ValueError(f"dt: {round(steps) + 1} samples per trajectory, at most 6001")
+        for a, b in (("q_start", "foot_start"), ("q_end", "foot_end")):
+            if getattr(self, a) is not None and getattr(self, b) is not None:
+                raise ValueError(f"{b}: give either {a} or {b}, not both")
+        for name in ("q_start", "q_end", "foot_start", "foot_end"):
+            v = getattr(self, name)
+            if v is not None and not all(math.isfinite(c) for c in v):
+                raise ValueError(f"{name}: values must be finite, got {v}")
+        if len(set(self.baselines)) != len(self.baselines):
+            raise ValueError("baselines: each baseline may be listed once")
+        return self
+
+    @property
+    def box(self) -> Obstacle | None:
+        """The obstacle (None in the flat case)."""
+        if self.obstacle is True:
+            return Obstacle()
+        return self.obstacle or None
+
+
+class SwingEnergyProblem(StudyProblem):
+    """Seed 000 swing-phase problem (see the module docstring).
+
+    Args:
+        robot: a serial 3-DOF robot (``calderon_leg`` by default).
+        params: the study :class:`Params`.
+        criterion: what F is — ``"score"`` (F = −score, the seed's GA) or a baseline criterion
+            ``"theta_total"`` (rad), ``"foot_distance"`` (m), ``"energy"`` (J),
+            ``"multi_criteria"`` (dimensionless, see ``swing_energy_baselines``).
+        refs: normalisers of the ``multi_criteria`` terms (``swing_energy_baselines``).
+
+    Attributes (all SI): ``q_start``/``q_end`` (3,) rad, ``start_steps``/``end_steps`` (3,) int,
+    ``t`` (K,) s, ``t_via`` (K_via + 2,) s, ``foot_start``/``foot_end`` (3,) m, ``z_ground`` m,
+    ``box`` (Box or None, without margin), ``acc_coordinated`` AcC (3,) rad/s².
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        params: Params,
+        criterion: str = "score",
+        refs: dict[str, float] | None = None,
+    ) -> None:
+        if not isinstance(robot, Robot) or robot.nq != 3:
+            name = getattr(robot, "name", type(robot).__name__)
+            raise ValueError(f"robot: swing_energy needs a serial 3-joint leg, got {name!r}")
+        if criterion not in CRITERIA:
+            raise ValueError(f"criterion: unknown {criterion!r}; expected one of {CRITERIA}")
+        if criterion == "multi_criteria" and refs is None:
+            raise ValueError("refs: the multi_criteria criterion needs its normalisers")
+        self.robot = robot
+        self.params = params
+        self.criterion = criterion
+        self.refs = dict(refs or {})
+        res = float(params.resolution)
+        self.res = res
+
+        self.start_steps = self._configuration("start", params.q_start, params.foot_start,
+                                               DEFAULT_START_STEPS)
+        self.end_steps = self._configuration(
+            "end", params.q_end, params.foot_end,
+            DEFAULT_END_STEPS if params.box is None else DEFAULT_END_STEPS_OBSTACLE)
+        self.q_start = self.start_steps * res
+        self.q_end = self.end_steps * res
+
+        self.n_via = int(params.n_via)
+        self.t = time_grid(params.T, params.dt)
+        self.t_via = np.linspace(0.0, params.T, self.n_via + 2)
+        self.n_samples = int(self.t.shape[0])
+        self._N = via_basis(self.t_via, self.t)  # (4, K, J)
+
+        # The coordinated start->end motion: the rest-to-rest cubic through no intermediate
+        # point, characterised like every candidate (its via points on the grid, same spline).
+        ends = np.stack([self.q_start, self.q_end])[None]
+        coord = ViaPointSpline(np.array([0.0, params.T]), ends)
+        self.q_coordinated_via = coord.evaluate(self.t_via[1:-1]).q[0]  # (n_via, 3)
+        self.coord_steps = np.rint(self.q_coordinated_via / res).astype(np.int64)  # (n_via, 3)
+        self.theta_min = np.abs(self.q_end - self.q_start)
+
+        feet = fk(robot, np.stack([self.q_start, self.q_end]))[:, :3, 3]
+        self.foot_start, self.foot_end = feet[0].copy(), feet[1].copy()
+        self.z_ground = float(min(feet[0, 2], feet[1, 2]))
+        self.box, self.margin = self._make_box(params.box)
+
+        self.eps_d = params.ratio_eps * res
+        self.eps_a = params.ratio_eps * 6.0 * res / params.T**2
+        self.w_d = np.asarray(params.w_d, dtype=float)
+        self.w_a = np.asarray(params.w_a, dtype=float)
+
+        # Search space (see the module docstring, "Genes").
+        self.lift_sign = self._lift_signs()
+        self.range_steps = np.rint(np.asarray(params.search_range) / res).astype(np.int64)
+        self.dead_steps = np.rint(params.dead_band * self.range_steps).astype(np.int64)
+        self.steps_min = np.ceil(robot.q_min / res - 1e-9).astype(np.int64)
+        self.steps_max = np.floor(robot.q_max / res + 1e-9).astype(np.int64)
+        lo, hi = self._gene_box()
+        n_constr = int(params.ground) + int(self.box is not None)
+        self.constraint_names = tuple(
+            n for n, on in (("ground", params.ground), ("obstacle", self.box is not None)) if on
+        )
+        names = {"score": ("neg_score",)}
+        self.objective_names = names.get(criterion, (criterion,))
+        super().__init__(3 * self.n_via, 1, n_constr, xl=lo.ravel() * res, xu=hi.ravel() * res,
+                         resolution=res, name=f"swing_energy[{criterion}]")
+        (qdd_c,) = self.trajectories(self.coordinated_x()[None], (2,))
+        self.acc_coordinated = np.max(np.abs(qdd_c[0]), axis=0)
+
+    # ------------------------------------------------------------------ set-up helpers
+    def _configuration(
+        self, which: str, q: Vec3 | None, foot: Vec3 | None, default: tuple[int, int, int]
+    ) -> NDArray[np.int64]:
+        """Start/end configuration in integer resolution steps (validated against the limits)."""
+        robot, res = self.robot, self.res
+        if foot is not None:
+            home = np.asarray(DEFAULT_START_STEPS, dtype=float) * RESOLUTION
+            sol = ik(robot, np.asarray(foot, dtype=float), q_ref=home)
+            if not bool(sol.ok):
+                raise ValueError(f"foot_{which}: {list(foot)} m is not reachable by "
+                                 f"{robot.name!r} within its joint limits")
+            q = (float(sol.q[0]), float(sol.q[1]), float(sol.q[2]))
+        if q is None:
+            steps = np.asarray(default, dtype=np.int64)
+        else:
+            steps = np.rint(np.asarray(q, dtype=float) / res).astype(np.int64)
+        qq = steps * res
+        if np.any(qq < robot.q_min - 1e-12) or np.any(qq > robot.q_max + 1e-12):
+            field = f"q_{which}" if foot is None else f"foot_{which}"
+            raise ValueError(f"{field}: configuration {qq.round(4).tolist()} rad is outside the "
+                             f"joint limits of {robot.name!r}")
+        return steps
+
+    def _make_box(self, ob: Obstacle | None) -> tuple[Box | None, float]:
+        """The obstacle box (no margin) and its margin (m); see :class:`Obstacle`."""
+        if ob is None:
+            return None, 0.0
+        chord = self.foot_end - self.foot_start
+        heading = np.array([chord[0], chord[1], 0.0])
+        n = float(np.linalg.norm(heading))
+        if n < 1e-9:
+            raise ValueError("obstacle: start and end feet coincide in the horizontal plane; "
+                             "'mid-stride' is undefined")
+        heading /= n
+        left = np.array([-heading[1], heading[0], 0.0])
+        c = self.foot_start + ob.along * chord + ob.lateral * left
+        c[2] = self.z_ground + 0.5 * ob.height
+        along_x = abs(heading[0]) >= abs(heading[1])
+        half = (ob.length / 2, ob.width / 2) if along_x else (ob.width / 2, ob.length / 2)
+        box = Box(center=(float(c[0]), float(c[1]), float(c[2])),
+                  half_size=(float(half[0]), float(half[1]), ob.height / 2))
+        return box, float(ob.margin)
+
+    # ------------------------------------------------------------------ trajectories
+    def _lift_signs(self) -> NDArray[np.int64]:
+        """+1/−1: the direction in which each joint lifts the foot at the start (sign of
+        ∂z_foot/∂q_i); 0 for a joint that does not (the hip yaw)."""
+        dz = jacobian(self.robot, self.q_start)[2]
+        return np.where(np.abs(dz) > 1e-3, np.sign(dz), 0.0).astype(np.int64)
+
+    def _gene_box(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """Integer gene bounds (n_via, 3) of the chosen encoding."""
+        p = self.params
+        W = np.broadcast_to(self.range_steps, (self.n_via, 3))
+        one_sided = np.broadcast_to((self.lift_sign != 0) & p.lift_only, (self.n_via, 3))
+        sgn = np.broadcast_to(np.where(self.lift_sign == 0, 1, self.lift_sign), (self.n_via, 3))
+        if p.encoding == "absolute":
+            c = self.coord_steps
+            lo = np.where(one_sided & (sgn > 0), c, c - W)
+            hi = np.where(one_sided & (sgn < 0), c, c + W)
+            lo = np.clip(lo, self.steps_min, self.steps_max)
+            hi = np.clip(hi, self.steps_min, self.steps_max)
+            return lo, np.maximum(hi, lo)
+        reach = np.broadcast_to(self.dead_steps, (self.n_via, 3)) + W
+        lo = np.where(one_sided & (sgn > 0), 0, -reach)
+        hi = np.where(one_sided & (sgn < 0), 0, reach)
+        return lo, hi
+
+    def via_steps(self, X: FloatArray) -> NDArray[np.int64]:
+        """Intermediate via points (B, n_via, 3) in resolution steps of decision vectors X.
+
+        ``absolute``: the gene itself. ``deviation``: the coordinated via point plus the gene's
+        excess over the dead band, ``sign(g) · max(|g| − D, 0)``; clipped to the joint limits.
+        """
+        G = np.rint(np.asarray(X, dtype=float).reshape(-1, self.n_via, 3) / self.res)
+        G = G.astype(np.int64)
+        if self.params.encoding == "absolute":
+            V = G
+        else:
+            V = self.coord_steps + np.sign(G) * np.maximum(np.abs(G) - self.dead_steps, 0)
+        return np.clip(V, self.steps_min, self.steps_max)
+
+    def encode(self, via: FloatArray) -> FloatArray:
+        """Decision vector (3 n_via,) rad whose via points are ``via`` (n_via, 3) rad (rounded
+        to the grid); the inverse of :meth:`via_steps` (may lie outside the GA's bounds)."""
+        V = np.rint(np.asarray(via, dtype=float).reshape(self.n_via, 3) / self.res)
+        V = V.astype(np.int64)
+        if self.params.encoding == "absolute":
+            G = V
+        else:
+            d = V - self.coord_steps
+            G = np.where(d == 0, 0, d + np.sign(d) * self.dead_steps)
+        return (G * self.res).ravel()
+
+    def via_points(self, X: FloatArray) -> FloatArray:
+        """All J = K_via + 2 via points (B, J, 3) rad of decision vectors ``X`` (B, 3 K_via)."""
+        V = self.via_steps(X) * self.res
+        B = V.shape[0]
+        return np.concatenate(
+            [np.broadcast_to(self.q_start, (B, 1, 3)), V, np.broadcast_to(self.q_end, (B, 1, 3))],
+            axis=1,
+        )
+
+    def trajectories(
+        self, X: FloatArray, orders: tuple[int, ...] = (0, 1, 2, 3)
+    ) -> list[FloatArray]:
+        """Sampled q, q̇, q̈, jerk (the derivative ``orders`` asked for), each (B, K, 3).
+
+        Relative to the start (``q_start + N·(V − q_start)``) so that a joint whose via points
+        all equal its start value is exactly constant (no float noise)."""
+        V = self.via_points(X) - self.q_start
+        out = []
+        for d in orders:
+            y = self._N[d] @ V
+            out.append(y + self.q_start if d == 0 else y)
+        return out
+
+    def genes(self, x: FloatArray) -> NDArray[np.int64]:
+        """Integer genes (n_via, 3) of a decision vector (x / resolution, rounded)."""
+        x = np.asarray(x, dtype=float).reshape(self.n_via, 3)
+        return np.rint(x / self.res).astype(np.int64)
+
+    # ------------------------------------------------------------------ criteria
+    def score_parts(self, q: FloatArray, qdd: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(f_d, f_a) per trajectory (B,) from q, q̈ (B, K, 3) — seed eqs 2–5 (module docstring)."""
+        theta = np.sum(np.abs(np.diff(q, axis=-2)), axis=-2)
+        theta = np.where(theta < _ZERO_THETA, 0.0, theta)
+        acc = np.max(np.abs(qdd), axis=-2)
+        acc = np.where(acc < _ZERO_ACC, 0.0, acc)
+        r_d = _ratio(self.theta_min, theta, self.eps_d)
+        r_a = _ratio(self.acc_coordinated, acc, self.eps_a)
+        return r_d @ self.w_d, r_a @ self.w_a
+
+    def score(self, q: FloatArray, qdd: FloatArray) -> FloatArray:
+        """Seed 000 objective F_o = w1 f_d + w2 f_a (B,), to maximise (best = w1 + w2 = 10)."""
+        f_d, f_a = self.score_parts(q, qdd)
+        return self.params.w1 * f_d + self.params.w2 * f_a
+
+    def energy(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
+        """Mechanical energy Σ_i ∫|τ_i q̇_i| dt (B,) J, τ by batched RNEA (gravity −z)."""
+        tau = inverse_dynamics(self.robot, q, qd, qdd)
+        return mechanical_energy(qd, tau, self.t).total
+
+    def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        c = self.criterion
+        need_pts = self.n_constr > 0 or c in ("foot_distance", "multi_criteria")
+        if c in ("energy", "multi_criteria"):
+            q, qd, qdd = self.trajectories(X, (0, 1, 2))
+        else:
+            q, qdd = self.trajectories(X, (0, 2))
+        P = frames(self.robot, q)[..., :3, 3] if need_pts else None  # (B, K, 4, 3)
+        if c == "score":
+            F = -self.score(q, qdd)
+        elif c == "theta_total":
+            F = np.sum(np.abs(np.diff(q, axis=-2)), axis=(-2, -1))
+        elif c == "energy":
+            F = self.energy(q, qd, qdd)
+        else:
+            assert P is not None
+            foot = P[:, :, -1]
+            step = np.linalg.norm(np.diff(foot, axis=-2), axis=-1)
+            D = step.sum(axis=-1)
+            if c == "foot_distance":
+                F = D
+            else:
+                from legcore.problems.swing_energy_baselines import multi_criteria
+
+                v_foot = np.max(step / np.diff(self.t), axis=-1)
+                F = multi_criteria(self.refs, q=q, qd=qd, D=D, v_foot=v_foot,
+                                   E=self.energy(q, qd, qdd))
+        G = self._constraints(P) if self.n_constr else None
+        return F[:, None], G
+
+    def _constraints(self, P: FloatArray | None) -> FloatArray:
+        """G (B, n_constr) from joint origins P (B, K, 4, 3): ground depth, box penetration (m)."""
+        assert P is not None
+        box = self.box
+        half = None if box is None else np.asarray(box.half_size) + self.margin
+        depth, z_min = chain_clearance(P, None if box is None else box.center, half)
+        cols = []
+        if self.params.ground:
+            cols.append(self.z_ground - self.params.ground_tolerance - z_min)
+        if box is not None:
+            cols.append(depth)
+        return np.stack(cols, axis=1)
+
+    # ------------------------------------------------------------------ decoding
+    def solution(self, x: FloatArray, label: str | None = None) -> Solution:
+        """The full decoded trajectory of ``x`` with the seed's Table 2/3 metrics.
+
+        ``objectives``: {"score"}; ``metrics``: score, f_d, f_a, θ_T, D, E, ∫τ²dt, clearances
+        (m; ``obstacle_clearance`` is the least distance of any link segment to the box, ≥
+        ``margin`` when feasible), constraint values, ``feasible`` (1/0), ``on_grid`` (1 when
+        every value is a multiple of the resolution), and ``criterion`` (this problem's F).
+        """
+        x = np.asarray(x, dtype=float)
+        if x.shape != (self.n_var,):
+            raise ValueError(f"x: expected shape ({self.n_var},), got {x.shape}")
+        q, qd, qdd, jerk = (a[0] for a in self.trajectories(x[None]))
+        tau = inverse_dynamics(self.robot, q, qd, qdd)
+        P = frames(self.robot, q)[..., :3, 3]  # (K, 4, 3)
+        foot = P[:, -1]
+        jm = joint_metrics(self.t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=foot)
+        f_d, f_a = (float(v[0]) for v in self.score_parts(q[None], qdd[None]))
+        score = self.params.w1 * f_d + self.params.w2 * f_a
+        F, G = self.evaluate(x[None])
+        power = tau * qd
+        absp = np.abs(power).sum(axis=1)
+        energy = np.concatenate([[0.0], np.cumsum(0.5 * (absp[1:] + absp[:-1]) * np.diff(self.t))])
+        genes = self.genes(x)
+        if label is None:
+            label = ("Calderón 2015 (proposed): w1 f_d + w2 f_a" if self.criterion == "score"
+                     else f"GA minimising {self.criterion}")
+        metrics: dict[str, float] = {
+            "score": score,
+            "f_d": f_d,
+            "f_a": f_a,
+            "theta_total": float(jm.theta_total),
+            "path_length": float(jm.path_length),
+            "energy_total": float(jm.energy_total),
+            "tau_sq_total": float(jm.tau_sq_total),
+            "duration": float(jm.duration),
+            "criterion": float(F[0, 0]),
+            "ground_clearance": float(P[:, 1:, 2].min() - self.z_ground),
+            "on_grid": float(np.allclose(genes.ravel() * self.res, x, rtol=0.0, atol=1e-9)),
+            "lift_height": float(P[:, -1, 2].max() - self.z_ground),
+        }
+        for name, g in zip(self.constraint_names, G[0], strict=True):
+            metrics[f"g_{name}"] = float(g)
+        metrics["feasible"] = float(np.all(G <= 0.0))
+        scene: dict[str, Any] = {
+            "targets": np.stack([self.foot_start, self.foot_end]),
+            "ground_z": self.z_ground,
+        }
+        if self.box is not None:
+            metrics["obstacle_clearance"] = self._clearance(P)
+            scene["obstacles"] = [self.box]
+            scene["obstacle_margin"] = self.margin
+        motion = Motion(
+            t=self.t.copy(), q=q, qd=qd, qdd=qdd, jerk=jerk, tau=tau, power=power, energy=energy,
+            tool=foot, joint_names=_joint_names(self.robot),
+            robot=self.robot.name, scene=scene,
+        )
+        table = [
+            {"metric": r.label, "key": r.key, "unit": r.unit,
+             **({"values": list(r.per_joint)} if r.per_joint is not None else {"total": r.total})}
+            for r in jm.as_table()
+        ]
+        extra = {
+            "label": label,
+            "criterion": self.criterion,
+            "encoding": self.params.encoding,
+            "genes": genes.tolist(),
+            "via_steps": self.via_steps(x[None])[0].tolist(),
+            "via_points": (self.via_steps(x[None])[0] * self.res).tolist(),
+            "start_steps": self.start_steps.tolist(),
+            "end_steps": self.end_steps.tolist(),
+            "q_start": self.q_start.tolist(),
+            "q_end": self.q_end.tolist(),
+            "resolution": self.res,
+        }
+        return Solution(x=x.copy(), objectives={"score": score}, metrics=metrics, table=table,
+                        motion=motion, extra=extra)
+
+    def _clearance(self, P: FloatArray, per_segment: int = 60) -> float:
+        """Least distance (m) of the sampled link segments P (K, 4, 3) to the box (no margin)."""
+        assert self.box is not None
+        lam = np.linspace(0.0, 1.0, per_segment)[:, None]
+        a, b = P[:, :-1, None, :], P[:, 1:, None, :]
+        pts = a + lam * (b - a)  # (K, 3, per_segment, 3)
+        d = point_box_distance(pts, self.box.center, self.box.half_size)
+        return float(d.min())
+
+    def coordinated_x(self) -> FloatArray:
+        """Decision vector of the coordinated start→end motion (its via points on the grid)."""
+        return self.encode(self.coord_steps * self.res)
+
+    # ------------------------------------------------------------------ baselines
+    def baseline_solutions(self) -> dict[str, Solution]:
+        """The seed's comparison trajectories, decoded like the optimum (computed once)."""
+        cached = getattr(self, "_baselines", None)
+        if cached is None:
+            from legcore.problems.swing_energy_baselines import compute_baselines
+
+            cached = compute_baselines(self)
+            self._baselines = cached
+        return dict(cached)
+
+    def baselines(self) -> dict[str, np.ndarray]:
+        return {k: np.asarray(v.x) for k, v in self.baseline_solutions().items() if v.x is not None}
+
+    def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
+        """Study-level facts: start/end, AcC, the obstacle, and the energy comparison."""
+        best_E = None
+        if front_X.shape[0]:
+            q, qd, qdd = self.trajectories(front_X[:1], (0, 1, 2))
+            best_E = float(self.energy(q, qd, qdd)[0])
+        base = self.baseline_solutions()
+        energies = {k: v.metrics["energy_total"] for k, v in base.items()}
+        out: dict[str, Any] = {
+            "q_start": self.q_start.tolist(),
+            "q_end": self.q_end.tolist(),
+            "foot_start": self.foot_start.tolist(),
+            "foot_end": self.foot_end.tolist(),
+            "z_ground": self.z_ground,
+            "acc_coordinated": self.acc_coordinated.tolist(),
+            "theta_min": self.theta_min.tolist(),
+            "obstacle": None if self.box is None else {
+                "center": list(self.box.center), "half_size": list(self.box.half_size),
+                "margin": self.margin},
+            "energy_best": best_E,
+            "energy_baselines": energies,
+        }
+        if best_E is not None:
+            out["energy_saving_vs_baselines"] = {
+                k: (1.0 - best_E / e) if e > 0 else None for k, e in energies.items()}
+        return out
+
+
+def _ratio(num: FloatArray, den: FloatArray, eps: float) -> FloatArray:
+    """min(1, (num + ε)/(den + ε)), with 0/0 := 1 (a joint that does not move meets its goal)."""
+    n = num + eps
+    d = den + eps
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(d > 0.0, n / np.where(d > 0.0, d, 1.0), 1.0)
+    return np.minimum(r, 1.0)
+
+
+def _joint_names(robot: Robot) -> tuple[str, ...]:
+    names = [robot.model.names[i] for i in range(1, robot.model.njoints)]
+    return tuple(names) if len(names) == robot.nq else tuple(f"q{i + 1}" for i in range(robot.nq))
+
+
+def build(robot: Any, params: Any) -> SwingEnergyProblem:
+    """The study's problem for ``robot`` (a 3-joint serial leg) and ``params`` (:class:`Params`)."""
+    if not isinstance(params, Params):
+        params = Params.model_validate(params)
+    return SwingEnergyProblem(robot, params)
+
+
+STUDY = Study(
+    kind="swing_energy",
+    title="Energy-optimal swing (transfer) phase of a walking-robot leg (seed 000)",
+    seed_paper="000",
+    params=Params,
+    default_robot="calderon_leg",
+    default_optimizer={
+        "kind": "ga",
+        "params": {"pop_size": 100, "mutation_rate": 0.03, "crossover_rate": 0.9,
+                   "elitism": 2, "fitness": "negated", "penalty": 300.0},
+    },
+    default_generations=100,
+    build=build,
+    robot_kinds=("serial",),
+)
