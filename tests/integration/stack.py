@@ -1,0 +1,239 @@
+"""Real-process service stacks for the integration tests.
+
+``Stack`` starts the same processes a user runs — ``uvicorn services.api.app:app`` and
+``celery … worker`` (via ``legopt worker``'s command line) — on either
+
+- ``embedded``: SQLite file + kombu filesystem broker in a temp directory (always available), or
+- ``services``: a fresh PostgreSQL database on 127.0.0.1:5432 and a private ``redis-server`` on a
+  free port (skipped where PostgreSQL or the redis-server binary is absent).
+
+Leases are short (4 s) and every generation is checkpointed so that recovery tests run fast.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+from services.client import Client
+from services.embedded import worker_command
+
+PG_ADMIN_URL = os.environ.get(
+    "LEGOPT_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test"
+)
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def postgres_available() -> bool:
+    try:
+        import psycopg
+
+        url = PG_ADMIN_URL.replace("postgresql+psycopg://", "postgresql://")
+        with psycopg.connect(url, connect_timeout=2):
+            return True
+    except Exception:
+        return False
+
+
+def redis_server_binary() -> str | None:
+    return shutil.which("redis-server")
+
+
+def services_available() -> bool:
+    return postgres_available() and redis_server_binary() is not None
+
+
+@contextmanager
+def postgres_database() -> Iterator[str]:
+    """A fresh PostgreSQL database (dropped afterwards); yields its SQLAlchemy URL."""
+    import psycopg
+
+    admin = PG_ADMIN_URL.replace("postgresql+psycopg://", "postgresql://")
+    name = f"legopt_it_{uuid.uuid4().hex[:10]}"
+    with psycopg.connect(admin, autocommit=True) as conn:
+        conn.execute(f'CREATE DATABASE "{name}"')
+    base = PG_ADMIN_URL.rsplit("/", 1)[0]
+    try:
+        yield f"{base}/{name}"
+    finally:
+        with psycopg.connect(admin, autocommit=True) as conn:
+            conn.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+
+
+class RedisServer:
+    """A private redis-server on a free port (restartable; keeps nothing on disk)."""
+
+    def __init__(self, workdir: Path) -> None:
+        self.port = free_port()
+        self.workdir = workdir
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> None:
+        binary = redis_server_binary()
+        assert binary is not None
+        self.proc = subprocess.Popen(
+            [binary, "--port", str(self.port), "--bind", "127.0.0.1", "--save", "",
+             "--appendonly", "no", "--dir", str(self.workdir)],
+            stdout=subprocess.DEVNULL,
+        )  # fmt: skip
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            try:
+                with socket.create_connection(("127.0.0.1", self.port), timeout=0.2):
+                    return
+            except OSError:
+                time.sleep(0.05)
+        raise RuntimeError("redis-server did not start")
+
+    def stop(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.terminate()
+            self.proc.wait(10)
+
+    def restart(self) -> None:
+        self.stop()
+        self.start()
+
+    @property
+    def url(self) -> str:
+        return f"redis://127.0.0.1:{self.port}/0"
+
+
+class Stack:
+    """API + worker processes on one database and broker; see the module docstring."""
+
+    def __init__(self, kind: str, tmp: Path, database_url: str, broker_url: str) -> None:
+        self.kind = kind
+        self.tmp = tmp
+        self.env = dict(os.environ)
+        self.env.update(
+            LEGOPT_DATA_DIR=str(tmp / "data"),
+            LEGOPT_DATABASE_URL=database_url,
+            LEGOPT_BROKER_URL=broker_url,
+            LEGOPT_ARTIFACT_DIR=str(tmp / "data" / "artifacts"),
+            LEGOPT_LEASE_SECONDS="4",
+            LEGOPT_HEARTBEAT_SECONDS="1",
+            LEGOPT_CHECKPOINT_EVERY="1",
+            NUMBA_NUM_THREADS="1",
+            REMAP_SIGTERM="SIGQUIT",
+            PYTHONUNBUFFERED="1",
+        )
+        self.port = free_port()
+        self.api: subprocess.Popen[bytes] | None = None
+        self.workers: list[subprocess.Popen[bytes]] = []
+        self.key = ""
+        self.logs = tmp / "logs"
+        self.logs.mkdir(parents=True, exist_ok=True)
+
+    # ------------------------------------------------------------------ processes
+    def _spawn(self, cmd: list[str], log_name: str) -> subprocess.Popen[bytes]:
+        log = open(self.logs / log_name, "ab")  # noqa: SIM115 - closed with the process
+        return subprocess.Popen(cmd, env=self.env, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
+
+    def migrate_and_key(self) -> None:
+        out = subprocess.run(
+            [sys.executable, "-m", "services.cli", "db", "upgrade"],
+            env=self.env, cwd=ROOT, capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        assert out.returncode == 0, out.stderr
+        out = subprocess.run(
+            [sys.executable, "-m", "services.cli", "keys", "create", "--name", "it"],
+            env=self.env, cwd=ROOT, capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        assert out.returncode == 0, out.stderr
+        self.key = out.stdout.strip().splitlines()[-1]
+
+    def start_api(self) -> None:
+        self.api = self._spawn(
+            [sys.executable, "-m", "uvicorn", "services.api.app:app", "--host", "127.0.0.1",
+             "--port", str(self.port), "--log-level", "warning"],
+            "api.log",
+        )  # fmt: skip
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            if self.api.poll() is not None:
+                raise RuntimeError(f"API exited: {(self.logs / 'api.log').read_text()[-2000:]}")
+            try:
+                if httpx.get(f"{self.url}/api/v1/health", timeout=1).status_code == 200:
+                    return
+            except httpx.HTTPError:
+                pass
+            time.sleep(0.2)
+        raise RuntimeError("API did not start in 60 s")
+
+    def stop_api(self) -> None:
+        if self.api is not None and self.api.poll() is None:
+            self.api.terminate()
+            self.api.wait(20)
+
+    def start_worker(self) -> subprocess.Popen[bytes]:
+        i = len(self.workers) + 1
+        proc = self._spawn(worker_command(f"w{i}", 1, "INFO"), f"worker{i}.log")
+        self.workers.append(proc)
+        return proc
+
+    def kill_worker(self, proc: subprocess.Popen[bytes]) -> None:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(10)
+
+    def worker_by_pid(self, pid: int) -> subprocess.Popen[bytes]:
+        for w in self.workers:
+            if w.pid == pid:
+                return w
+        raise KeyError(pid)
+
+    def stop(self) -> None:
+        self.stop_api()
+        for w in self.workers:
+            if w.poll() is None:
+                w.send_signal(signal.SIGTERM)
+        for w in self.workers:
+            try:
+                w.wait(20)
+            except subprocess.TimeoutExpired:
+                w.kill()
+                w.wait()
+
+    def log_tail(self, n: int = 3000) -> str:
+        return "\n".join(
+            f"--- {p.name}\n{p.read_text(errors='replace')[-n:]}"
+            for p in sorted(self.logs.iterdir())
+        )
+
+    # ------------------------------------------------------------------ client
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.port}"
+
+    def client(self) -> Client:
+        return Client(self.url, self.key, timeout=30)
+
+    def wait_for(self, job_id: str, pred: Any, timeout_s: float = 120.0) -> dict[str, Any]:
+        """Poll job ``job_id`` until ``pred(job)``; fails with the logs after ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        with self.client() as c:
+            while True:
+                job = c.job(job_id)
+                if pred(job):
+                    return job
+                if time.monotonic() > deadline:
+                    raise AssertionError(f"timeout waiting for {job_id}: {job}\n{self.log_tail()}")
+                time.sleep(0.2)
