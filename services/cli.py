@@ -394,6 +394,12 @@ def replay(
     elif save is not None:
         save.write_bytes(path.read_bytes())
         path = save
+    import signal
+
+    def _interrupt(*_: object) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, _interrupt)  # a terminated replay also stops its viewer
     handle = rerun_writer.open_viewer(path, web=True if web else None, port=port)
     if handle.url:
         console.print(f"Rerun web viewer: {handle.url}  (Ctrl-C to stop)")

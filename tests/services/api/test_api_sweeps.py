@@ -26,7 +26,7 @@ def study_with_param(name: str) -> tuple[str, dict[str, Any]]:
         opt = studies()[kind].default_optimizer
         if name in opt["params"]:
             return kind, opt
-    pytest.skip(f"no study's optimizer has {name!r}")
+    raise AssertionError(f"no study's optimizer has {name!r}")
 
 
 def serial_study() -> tuple[str, dict[str, Any]]:
@@ -34,7 +34,7 @@ def serial_study() -> tuple[str, dict[str, Any]]:
         robot = catalog.get(studies()[kind].default_robot)
         if isinstance(robot, Robot):
             return kind, robot.spec.model_dump(mode="json")
-    pytest.skip("no study with a serial default robot")
+    raise AssertionError("no study with a serial default robot")
 
 
 # --------------------------------------------------------------------------- pure expansion
