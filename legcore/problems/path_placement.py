@@ -42,7 +42,7 @@ The decoded ``Motion`` has ``power_kind="electrical"``: the motors' electrical p
 
 Defaults (PC = 0.5, P_n = 0.4 kW, the HKA settings, the built-in paths and their originals) are
 the seed's where it gives them and documented choices otherwise:
-docs/studies/001_path_placement.md.
+docs/studies.md (seed 001).
 
 :func:`compare_initialisations` runs HKA with its original initialisation (eq 16) and with the
 seed's modified initialisation (a coarse survey first) over several seeds (seed 001 Figure 8).
@@ -149,7 +149,7 @@ BranchName = Literal[
 
 class Params(StudyParams):
     """Parameters of the ``path_placement`` study (defaults: seed 001's own settings, where it
-    gives them; see docs/studies/001_path_placement.md for the chosen ones).
+    gives them; see docs/studies.md (seed 001) for the chosen ones).
 
     - ``path``: ``"pan"`` (Robotworks stand-in, 225 points), ``"jar"`` (tilted jar, 413
       points) or ``"csv"`` (the text in ``csv``, see :func:`parse_path_csv`).

@@ -24,7 +24,7 @@ time), so that corners do not ask for infinite accelerations.
 Both are written at their "as drawn" location, the ORIGINAL placement of the study: the pan's
 centre at :data:`PAN_CENTER` and the jar's base centre at :data:`JAR_CENTER` in the robot base
 frame — close to the robot with the arm folded (low manipulability), like the paper's
-originals (see docs/studies/001_path_placement.md).
+originals (see docs/studies.md (seed 001)).
 
 CSV text (:func:`parse_path_csv`): one point per row, comma separated (``#`` comments and blank
 lines ignored), SI units. Columns, optionally named by a header row:

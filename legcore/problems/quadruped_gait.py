@@ -41,7 +41,7 @@ side by side, ``"FL.shoulder"`` …), the seed 000 metric table per joint, and i
 ``table2`` (the stance stroke in the paper's 48 positions and columns) and ``table2_paper`` (the
 printed rows beside ours).
 
-Seed data and our choices (docs/studies/003_quadruped_gait.md): depth H = 0.1648 m, stroke
+Seed data and our choices (docs/studies.md (seed 003)): depth H = 0.1648 m, stroke
 centre c = −1.2 mm and the default step length 0.119 m come from Table 2's first and last
 printed positions (the paper's 48-position stroke); the paper gives no timing, step height or
 body speed: v = 0.03 m/s, h = 0.03 m and β = 0.8 are ours.

@@ -2,7 +2,7 @@
 
 Calderón, Bedolla & Szwedowicz (2015). One 3-DOF leg (``calderon_leg``: hip yaw + two pitch
 joints, seed 000 Table 1) swings freely (open chain) from a start to an end configuration in
-``T`` = 3 s. See ``docs/studies/000_swing_energy.md`` for the paper's tables beside ours.
+``T`` = 3 s. See ``docs/studies.md (seed 000)`` for the paper's tables beside ours.
 
 Genes
     ``x`` (3·K_via,) rad, via-point-major (``x[3 j + i]`` belongs to joint ``i`` at intermediate via
@@ -27,7 +27,7 @@ Genes
     the joint agree — and at 100 × 100 it ends at a score ≈ 2.4 (0.2–0.4 J) in both cases (10
     seeds). With the dead band an unmutated gene reproduces the coordinated motion, a fresh gene
     does so with probability 2/3, and the GA reaches 9.68 (flat, 10/10 seeds) / 7.50 (box, 8/10
-    seeds) — see ``docs/studies/000_swing_energy.md``.
+    seeds) — see ``docs/studies.md (seed 000)``.
 
 Trajectory
     The joint trajectory passes through start, the K_via via points and end at the equally spaced

@@ -112,7 +112,7 @@ def test_seed_motion_is_complete_and_on_the_capsule(arm, seed):
     np.testing.assert_allclose(mo.power, mo.tau * mo.qd, rtol=1e-15)
     assert np.all(np.diff(mo.energy) >= 0.0)
     assert mo.energy[-1] == pytest.approx(seed.metrics["energy"], rel=1e-12)
-    # our numbers for the seed's law (docs/studies/004_path_tracking.md): joint ranges, speeds
+    # our numbers for the seed's law (docs/studies.md (seed 004)): joint ranges, speeds
     q_deg = np.degrees([mo.q.min(axis=0), mo.q.max(axis=0)])
     np.testing.assert_allclose(q_deg[:, 0], [40.21, 139.79], atol=0.01)  # base (fig. 20)
     np.testing.assert_allclose(q_deg[:, 1], [74.60, 114.30], atol=0.01)  # shoulder (fig. 21)
