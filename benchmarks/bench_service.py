@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import statistics
 import sys
 import tempfile
 import time
@@ -81,7 +80,9 @@ def bench_sweep(st: Stack, n_jobs: int) -> float:
         return time.perf_counter() - t0
 
 
-async def _hammer(url: str, key: str, paths: list[str], clients: int, per_client: int) -> list[float]:
+async def _hammer(
+    url: str, key: str, paths: list[str], clients: int, per_client: int
+) -> list[float]:
     lat: list[float] = []
     limits = httpx.Limits(max_connections=clients)
     async with httpx.AsyncClient(headers={"X-API-Key": key}, limits=limits, timeout=60) as http:
@@ -175,17 +176,23 @@ def main() -> int:
             continue
         rows.append(run_stack(kind, args))
     print()
-    print(f"{'stack':<10} {'submit→start p50/p95 ms':>26} {'sweep 1w s':>11} {'sweep 2w s':>11} "
-          f"{'speed-up':>9} {'GET p50/p95 ms':>16} {'req/s':>7}")
+    print(
+        f"{'stack':<10} {'submit→start p50/p95 ms':>26} {'sweep 1w s':>11} {'sweep 2w s':>11} "
+        f"{'speed-up':>9} {'GET p50/p95 ms':>16} {'req/s':>7}"
+    )
     for r in rows:
         lat, get = r["latency"], r["get"]
-        print(f"{r['stack']:<10} {lat['p50_ms']:>12.0f} / {lat['p95_ms']:<11.0f} "
-              f"{r['sweep_1w_s']:>11.1f} {r['sweep_2w_s']:>11.1f} {r['speedup']:>8.2f}x "
-              f"{get['p50_ms']:>7.0f} / {get['p95_ms']:<6.0f} {get['rps']:>7.0f}")
+        print(
+            f"{r['stack']:<10} {lat['p50_ms']:>12.0f} / {lat['p95_ms']:<11.0f} "
+            f"{r['sweep_1w_s']:>11.1f} {r['sweep_2w_s']:>11.1f} {r['speedup']:>8.2f}x "
+            f"{get['p50_ms']:>7.0f} / {get['p95_ms']:<6.0f} {get['rps']:>7.0f}"
+        )
     for r in rows:
         g = r["get"]
-        print(f"{r['stack']}: GET under {args.clients} clients: {g['requests']} requests on a job "
-              f"with a {g['front']}-point front")
+        print(
+            f"{r['stack']}: GET under {args.clients} clients: {g['requests']} requests on a job "
+            f"with a {g['front']}-point front"
+        )
     return 0
 
 

@@ -20,7 +20,16 @@ from legcore.problems.registry import get_study
 from legcore.problems.study import Solution, Study, StudyProblem
 from legcore.robots import LeggedRobot, Robot, build_robot, catalog
 
-__all__ = ["JobSize", "Prepared", "RunResult", "finalize", "job_size", "prepare", "resolve_robot", "run"]
+__all__ = [
+    "JobSize",
+    "Prepared",
+    "RunResult",
+    "finalize",
+    "job_size",
+    "prepare",
+    "resolve_robot",
+    "run",
+]
 
 
 def resolve_robot(spec: JobSpec, study: Study) -> Robot | LeggedRobot:

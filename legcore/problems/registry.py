@@ -1,4 +1,4 @@
-"""The study kinds, by name: ``get_study("swing_energy")`` → :class:`~legcore.problems.study.Study`."""
+"""The study kinds, by name: ``get_study("swing_energy")`` → a :class:`Study` descriptor."""
 
 from __future__ import annotations
 

@@ -54,7 +54,7 @@ class Chain:
 
 @dataclass(frozen=True, eq=False)
 class MotorArrays:
-    """Per-joint actuator data (n,), NaN where unknown. See :class:`legcore.robots.spec.MotorSpec`."""
+    """Per-joint actuator data (n,), NaN where unknown (see ``MotorSpec``)."""
 
     G: FloatArray
     Jm: FloatArray

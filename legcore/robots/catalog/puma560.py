@@ -48,7 +48,9 @@ def reference() -> dict[str, Any]:
     return data
 
 
-def _with_gun(m: float, com: np.ndarray, inertia: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+def _with_gun(
+    m: float, com: np.ndarray, inertia: np.ndarray
+) -> tuple[float, np.ndarray, np.ndarray]:
     """Combine link 6 with a point-mass gun on z6 (parallel-axis theorem)."""
     gun = np.array([0.0, 0.0, GUN_COM])
     mt = m + GUN_MASS
