@@ -71,6 +71,7 @@ from legcore.problems.quadruped_gait_cycle import (
     stance_loads,
 )
 from legcore.problems.study import Motion, Solution, Study, StudyParams, StudyProblem
+from legcore.robots.catalog.animatronic_quadruped import TABLE2
 from legcore.robots.legged import LeggedRobot
 from legcore.robots.spec import DHRobotSpec
 
@@ -86,17 +87,8 @@ _EVENT_EPS = 1e-7  # phase offset of the margin samples just before/after a lift
 _SINGULAR = 1e-6  # |sin q4| below which a leg counts as straight (singular)
 
 #: Seed 003 Table 2 as printed: position, front (Ang3, Ang4, q3DA, q4DA), rear (Ang3, Ang4,
-#: q3TA, q4TA), degrees (the same data as the catalog's ``TABLE2``).
-TABLE2_PAPER: tuple[tuple[int, tuple[int, ...], tuple[int, ...]], ...] = (
-    (1, (81, 61, 369, 20), (60, 80, 30, 340)),
-    (2, (82, 62, 368, 20), (61, 81, 29, 340)),
-    (3, (83, 63, 367, 20), (62, 82, 28, 340)),
-    (4, (84, 64, 366, 20), (63, 83, 27, 340)),
-    (45, (116, 99, 334, 17), (99, 115, 351, 344)),
-    (46, (117, 100, 333, 17), (100, 116, 350, 344)),
-    (47, (118, 101, 332, 17), (101, 117, 349, 344)),
-    (48, (119, 102, 331, 17), (102, 118, 348, 344)),
-)
+#: q3TA, q4TA), degrees — kept with the robot in the catalog.
+TABLE2_PAPER: tuple[tuple[int, tuple[int, ...], tuple[int, ...]], ...] = TABLE2
 _TABLE2_COLUMNS = ("position", "Ang3", "Ang4", "q3DA", "q4DA", "Ang3", "Ang4", "q3TA", "q4TA")
 
 Pair = tuple[float, float]
