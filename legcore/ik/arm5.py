@@ -127,7 +127,7 @@ def arm5_ik_down(
     keeps joint 5 at q5 = 0. With ``q_min``/``q_max`` (5,) the angles are shifted by 2π into the
     limits where possible (nearest ``q_ref`` (…, 4, 5)-broadcastable, if given).
     """
-    from legcore.kinematics import wrap_to_limits
+    from legcore.kinematics import wrap_branch_solutions
 
     p = np.asarray(p, dtype=float)
     if p.ndim < 1 or p.shape[-1] != 3:
@@ -166,16 +166,7 @@ def arm5_ik_down(
             b = 2 * ri + ei
             out[:, b] = th - g.offset
             reach[:, b] = ok
-    out = np.where(reach[..., None], out, np.nan)
-    if q_min is not None and q_max is not None:
-        ref = None if q_ref is None else np.broadcast_to(np.asarray(q_ref, float), out.shape)
-        out = wrap_to_limits(out, q_min, q_max, ref)
-        lo = np.asarray(q_min, dtype=float)
-        hi = np.asarray(q_max, dtype=float)
-        within = reach & np.all((out >= lo - 1e-12) & (out <= hi + 1e-12), axis=-1)
-    else:
-        out = wrap_to_limits(out, np.full(5, -math.pi), np.full(5, math.pi))
-        within = reach.copy()
+    out, within = wrap_branch_solutions(out, reach, q_min, q_max, q_ref)
     return Arm5Solutions(
         q=out.reshape(*batch, 4, 5),
         reachable=reach.reshape(*batch, 4),

@@ -149,7 +149,7 @@ def puma560_ik(
     (6,) they are shifted by 2π into the limits where possible (nearest ``q_ref``, broadcastable
     to (..., 8, 6), if given) and ``within_limits`` says which branches are inside.
     """
-    from legcore.kinematics import wrap_to_limits
+    from legcore.kinematics import wrap_branch_solutions
 
     T = np.asarray(T, dtype=float)
     if T.ndim < 2 or T.shape[-2:] != (4, 4):
@@ -216,16 +216,7 @@ def puma560_ik(
                 th = np.stack([th1, th2, th3, t4, t5, t6], axis=-1)
                 out[:, b] = th - g.offset
                 reach[:, b] = elbow_ok
-    out = np.where(reach[..., None], out, np.nan)
-    if q_min is not None and q_max is not None:
-        ref = None if q_ref is None else np.broadcast_to(np.asarray(q_ref, float), out.shape)
-        out = wrap_to_limits(out, q_min, q_max, ref)
-        lo = np.asarray(q_min, dtype=float)
-        hi = np.asarray(q_max, dtype=float)
-        within = reach & np.all((out >= lo - 1e-12) & (out <= hi + 1e-12), axis=-1)
-    else:
-        out = out - 2.0 * math.pi * np.ceil((out - math.pi) / (2.0 * math.pi))  # (−π, π]
-        within = reach.copy()
+    out, within = wrap_branch_solutions(out, reach, q_min, q_max, q_ref)
     return Puma560Solutions(
         q=out.reshape(*batch, 8, 6),
         reachable=reach.reshape(*batch, 8),
