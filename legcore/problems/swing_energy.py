@@ -276,6 +276,9 @@ class Params(StudyParams):
         return self.obstacle or None
 
 
+_BASELINE_CACHE: dict[str, dict[str, Solution]] = {}
+
+
 class SwingEnergyProblem(StudyProblem):
     """Seed 000 swing-phase problem (see the module docstring).
 
@@ -643,13 +646,21 @@ class SwingEnergyProblem(StudyProblem):
 
     # ------------------------------------------------------------------ baselines
     def baseline_solutions(self) -> dict[str, Solution]:
-        """The seed's comparison trajectories, decoded like the optimum (computed once)."""
-        cached = getattr(self, "_baselines", None)
+        """The seed's comparison trajectories, decoded like the optimum.
+
+        They depend only on the robot and the study parameters (not on the job's seed), so they
+        are computed once per process for each (robot, params): a sweep over seeds or optimiser
+        settings reuses them.
+        """
+        key = self.robot.spec.model_dump_json() + self.params.model_dump_json()
+        cached = _BASELINE_CACHE.get(key)
         if cached is None:
             from legcore.problems.swing_energy_baselines import compute_baselines
 
             cached = compute_baselines(self)
-            self._baselines = cached
+            if len(_BASELINE_CACHE) >= 16:
+                _BASELINE_CACHE.pop(next(iter(_BASELINE_CACHE)))
+            _BASELINE_CACHE[key] = cached
         return dict(cached)
 
     def baselines(self) -> dict[str, np.ndarray]:
