@@ -1,0 +1,127 @@
+"""The job executor in-process on a real SQLite database: failures end as ``failed`` with a
+message naming the field (the worker never raises), a broken recording is only a warning, and a
+job resumed from a checkpoint ends exactly where the uninterrupted run ends."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from datetime import timedelta
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from legcore.optimizers import to_jsonable
+from legcore.runner import prepare
+from services.store import repository as repo
+from services.store.keys import generate_api_key
+from services.store.lifecycle import claim_job, requeue_expired, save_checkpoint
+from services.store.migrate import upgrade
+from services.store.repository import now_utc
+from services.store.session import reset_engine, session_scope
+from services.store.settings import Settings, get_settings
+from services.worker import execute
+
+SPEC: dict[str, Any] = {
+    "problem": {"kind": "quadruped_gait"},
+    "budget": {"generations": 6},
+    "seed": 3,
+    "record": False,
+}
+
+
+@pytest.fixture
+def settings(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Settings]:
+    url = f"sqlite:///{tmp_path / 'legopt.db'}"
+    monkeypatch.setenv("LEGOPT_DATA_DIR", str(tmp_path))
+    monkeypatch.setenv("LEGOPT_DATABASE_URL", url)
+    monkeypatch.setenv("LEGOPT_CHECKPOINT_EVERY", "1")
+    get_settings.cache_clear()
+    reset_engine()
+    upgrade(url)
+    try:
+        yield get_settings()
+    finally:
+        get_settings.cache_clear()
+        reset_engine()
+
+
+def _job(spec: dict[str, Any], total: int = 6) -> str:
+    with session_scope() as s:
+        key = repo.create_api_key(s, name="t", key_hash=generate_api_key()[1])
+        return repo.create_job(s, owner_key_id=key.id, spec=spec, total_generations=total).id
+
+
+def _get(job_id: str) -> Any:
+    with session_scope() as s:
+        return repo.get_job(s, job_id)
+
+
+def test_unrunnable_spec_fails_with_the_field_and_the_worker_survives(settings: Settings) -> None:
+    bad = {**SPEC, "problem": {"kind": "quadruped_gait", "step_lenght": 0.1}}
+    job_id = _job(bad)
+    outcome = execute.execute_job(job_id, settings, wid="w1")
+    assert outcome.status == "failed"
+    job = _get(job_id)
+    assert job.status == "failed"
+    assert "problem.quadruped_gait.step_lenght" in job.error_message
+    assert "Extra inputs are not permitted" in job.error_message
+
+
+def test_a_failing_recording_is_a_warning_not_a_failure(
+    settings: Settings, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from services.worker import rerun_writer
+
+    def broken(*_: Any, **__: Any) -> None:
+        raise OSError("disk full")
+
+    monkeypatch.setattr(rerun_writer, "write_recording", broken)
+    job_id = _job({**SPEC, "record": True})
+    assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
+    job = _get(job_id)
+    assert job.status == "succeeded"
+    assert any("recording failed: OSError: disk full" in w for w in job.warnings)
+    with session_scope() as s:
+        assert repo.get_artifact(s, job_id, "recording") is None
+        assert repo.get_artifact(s, job_id, "result") is not None
+
+
+def test_resume_from_checkpoint_ends_where_the_uninterrupted_run_ends(settings: Settings) -> None:
+    reference = _job(SPEC)
+    assert execute.execute_job(reference, settings, wid="w1").status == "succeeded"
+
+    # A second job: worker "dead" claims it, runs 3 generations, checkpoints, and vanishes.
+    job_id = _job(SPEC)
+    t0 = now_utc()
+    with session_scope() as s:
+        assert claim_job(s, job_id, "dead", settings.lease_seconds, now=t0) is not None
+    prepared = prepare(SPEC)
+    run = prepared.new_run()
+    for _ in range(3):
+        run.step()
+    blob = json.dumps(to_jsonable(run.state_dict())).encode()
+    with session_scope() as s:
+        save_checkpoint(s, job_id, "dead", generation=3, state=blob)
+        report = requeue_expired(s, t0 + timedelta(seconds=settings.lease_seconds + 1))
+    assert report.requeued == (job_id,)
+
+    outcome = execute.execute_job(job_id, settings, wid="w2")
+    assert outcome.status == "succeeded" and outcome.resumed_from == 3
+    with session_scope() as s:
+        a, b = repo.get_result(s, reference), repo.get_result(s, job_id)
+        job = repo.get_job(s, job_id)
+    assert b.best_x == a.best_x and b.objectives == a.objectives and b.metrics == a.metrics
+    assert job.attempt_count == 2
+    assert any("resumed from the checkpoint of generation 3" in w for w in job.warnings)
+
+
+def test_a_cancelled_job_is_not_run(settings: Settings) -> None:
+    job_id = _job(SPEC)
+    with session_scope() as s:
+        from services.store.lifecycle import request_cancel
+
+        request_cancel(s, job_id)
+    assert execute.execute_job(job_id, settings, wid="w1").status == "not-claimed"
+    assert _get(job_id).status == "cancelled"
