@@ -313,11 +313,13 @@ class ArtifactOut(BaseModel):
         return cls(kind=a.kind, size_bytes=a.size_bytes, sha256=a.sha256, created_at=a.created_at)
 
 
-def objective_names(result: ResultRecord | None) -> list[str]:
-    """Objective names stored with a result (``objectives = {"names": [...], ...}``)."""
-    if result is None or not isinstance(result.objectives, dict):
+def objective_names(result: ResultRecord | dict[str, Any] | None) -> list[str]:
+    """Objective names stored with a result (``objectives = {"names": [...], ...}``); takes
+    the result record or just its ``objectives`` JSON."""
+    objectives = result.objectives if isinstance(result, ResultRecord) else result
+    if not isinstance(objectives, dict):
         return []
-    names = result.objectives.get("names")
+    names = objectives.get("names")
     return [str(n) for n in names] if isinstance(names, list) else []
 
 

@@ -388,6 +388,30 @@ def get_result(session: Session, job_id: str) -> ResultRecord | None:
     return fetch_one(session, ResultRecord, select(RESULTS).where(RESULTS.c.job_id == job_id))
 
 
+def result_briefs(session: Session, job_ids: Iterable[str]) -> dict[str, tuple[Any, Any]]:
+    """``{job_id: (objectives, metrics)}`` of the given jobs' results in one query (jobs without
+    a result are absent) — the sweep table's columns, without the summaries."""
+    ids = list(job_ids)
+    if not ids:
+        return {}
+    stmt = select(RESULTS.c.job_id, RESULTS.c.objectives, RESULTS.c.metrics).where(
+        RESULTS.c.job_id.in_(ids)
+    )
+    return {
+        r.job_id: (copy.deepcopy(r.objectives), copy.deepcopy(r.metrics))
+        for r in session.execute(stmt)
+    }
+
+
+def get_result_objectives(session: Session, job_id: str) -> Any:
+    """Only the ``objectives`` JSON of a job's result (None until it has succeeded) — without
+    the (possibly large) summary, for the front and sweep views."""
+    row = session.execute(
+        select(RESULTS.c.objectives).where(RESULTS.c.job_id == job_id)
+    ).first()
+    return None if row is None else copy.deepcopy(row[0])
+
+
 def list_pareto(session: Session, job_id: str) -> tuple[ParetoPointRecord, ...]:
     """The final Pareto front of a job, by index (empty until it has succeeded)."""
     stmt = (

@@ -39,6 +39,8 @@ def broker_options(settings: Settings) -> dict[str, object]:
             "processed_folder": str(processed),
             "store_processed": False,
             "control_folder": str(control),
+            # an idle worker looks for a new message file every 0.1 s (default 1 s)
+            "polling_interval": 0.1,
         }
     return {"visibility_timeout": TASK_TIME_LIMIT_S + 600}
 

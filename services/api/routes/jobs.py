@@ -164,7 +164,7 @@ def get_pareto(job_id: str, key: CurrentKey, ctx: Context, page: Pagination) -> 
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         points = repo.list_pareto(session, job.id)
-        names = objective_names(repo.get_result(session, job.id))
+        names = objective_names(repo.get_result_objectives(session, job.id))
     chosen = points[page.offset : page.offset + page.limit]
     return ParetoPage(
         items=[ParetoPointOut.from_record(p) for p in chosen],

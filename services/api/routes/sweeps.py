@@ -172,22 +172,21 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
         counts = repo.count_jobs_by_status(session, owner_key_id=key.id, sweep_id=sweep.id)
         total = sum(counts.values())
         jobs = _jobs_in_order(session, key.id, sweep.id, total, page.limit, page.offset)
-        results = {
-            j.id: repo.get_result(session, j.id) for j in jobs if j.status is JobStatus.SUCCEEDED
-        }
+        results = repo.result_briefs(
+            session, [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
+        )
     axes = sweep.axes if isinstance(sweep.axes, dict) else {}
     columns = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
     names: list[str] = []
     rows = []
     for job in jobs:
-        result = results.get(job.id)
+        brief = results.get(job.id)
         objectives = metrics = None
-        if result is not None:
-            names = names or objective_names(result)
-            objectives = result.objectives
+        if brief is not None:
+            objectives, metrics = brief
+            names = names or objective_names(objectives)
             if isinstance(objectives, dict) and "values" in objectives:
                 objectives = objectives["values"]
-            metrics = result.metrics
         rows.append(
             SweepRow(
                 job_id=job.id,
