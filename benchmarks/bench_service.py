@@ -42,7 +42,7 @@ TRIVIAL = {
 }
 SWEEP_JOB = {
     "problem": {"kind": "swing_energy"},
-    "budget": {"generations": 40},
+    "budget": {"generations": 150},
     "record": False,
 }
 FRONT_300 = {"problem": {"kind": "hexapod_workspace"}, "budget": {"generations": 30}, "seed": 1}
@@ -128,7 +128,7 @@ def run_stack(kind: str, args: argparse.Namespace) -> dict[str, Any]:
             st.env["LEGOPT_LEASE_SECONDS"] = "30"
             st.env["LEGOPT_HEARTBEAT_SECONDS"] = "5"
             st.migrate_and_key()
-            st.start_api()
+            st.start_api(workers=args.api_workers)
             for _ in range(workers):
                 st.start_worker()
             time.sleep(3.0)  # workers import legcore and connect
@@ -168,6 +168,7 @@ def main() -> int:
     ap.add_argument("--sweep-jobs", type=int, default=64)
     ap.add_argument("--clients", type=int, default=100)
     ap.add_argument("--per-client", type=int, default=10)
+    ap.add_argument("--api-workers", type=int, default=2, help="uvicorn processes (compose: 2)")
     args = ap.parse_args()
     rows = []
     for kind in args.stacks:

@@ -254,11 +254,12 @@ def serve(
     host: Annotated[str, typer.Option(help="bind address")] = "127.0.0.1",
     port: Annotated[int, typer.Option(help="port")] = 8000,
     workers: Annotated[int, typer.Option(min=1, max=64, help="worker processes")] = 2,
+    api_workers: Annotated[int, typer.Option(min=1, max=16, help="API processes")] = 1,
 ) -> None:
     """The embedded default: API + WORKERS real worker processes, SQLite, filesystem broker."""
     from services.embedded import serve as run_serve
 
-    run_serve(host=host, port=port, workers=workers)
+    run_serve(host=host, port=port, workers=workers, api_workers=api_workers)
 
 
 @app.command()

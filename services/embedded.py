@@ -85,11 +85,12 @@ def stop_processes(procs: list[subprocess.Popen[bytes]], timeout: float = 10.0) 
             p.wait()
 
 
-def serve(host: str = "127.0.0.1", port: int = 8000, workers: int = 2) -> None:
-    """Migrate, ensure the API key, start ``workers`` worker processes and the API (blocking)."""
+def serve(
+    host: str = "127.0.0.1", port: int = 8000, workers: int = 2, api_workers: int = 1
+) -> None:
+    """Migrate, ensure the API key, start ``workers`` worker processes and the API with
+    ``api_workers`` processes (blocking)."""
     import uvicorn
-
-    from services.api.app import create_app
 
     settings = get_settings()
     ensure_database(settings)
@@ -102,6 +103,12 @@ def serve(host: str = "127.0.0.1", port: int = 8000, workers: int = 2) -> None:
     procs = start_workers(workers)
     try:
         print(f"LegOpt API on http://{host}:{port}/api/v1 ({workers} workers)", flush=True)
-        uvicorn.run(create_app(settings), host=host, port=port, log_level="warning")
+        uvicorn.run(
+            "services.api.app:app",
+            host=host,
+            port=port,
+            workers=api_workers,
+            log_level="warning",
+        )
     finally:
         stop_processes(procs)

@@ -161,10 +161,10 @@ class Stack:
         assert out.returncode == 0, out.stderr
         self.key = out.stdout.strip().splitlines()[-1]
 
-    def start_api(self) -> None:
+    def start_api(self, workers: int = 1) -> None:
         self.api = self._spawn(
             [sys.executable, "-m", "uvicorn", "services.api.app:app", "--host", "127.0.0.1",
-             "--port", str(self.port), "--log-level", "warning"],
+             "--port", str(self.port), "--log-level", "warning", "--workers", str(workers)],
             "api.log",
         )  # fmt: skip
         deadline = time.monotonic() + 60
