@@ -156,8 +156,8 @@ class PoseTrack:
     ``rotation`` (N, 3, 3)), or static when ``t`` is None (then N = 1).
 
     ``geometry`` is what is drawn in the entity's own frame: ``"axes"`` (a link frame, axes of
-    ``axis_length``), ``"capsule"`` (a link: from the origin along +z, ``length``, ``radius``) or
-    ``"box"`` (centred, ``half_size``)."""
+    ``axis_length``), ``"capsule"`` (a link: from the origin along +z, ``length``, ``radius``),
+    ``"box"`` (centred, ``half_size``) or ``"mesh"`` (the file ``mesh``, scale ``half_size``)."""
 
     path: str
     t: FloatArray | None
@@ -170,6 +170,7 @@ class PoseTrack:
     half_size: tuple[float, float, float] = (0.0, 0.0, 0.0)
     color: tuple[int, int, int] = C_LINK
     source_samples: int = 1
+    mesh: str = ""  # geometry "mesh": a local mesh file (URDF visual), scaled by ``half_size``
 
     @property
     def n_samples(self) -> int:
@@ -743,6 +744,8 @@ def _robot_items(
                     source_samples=K,
                 )
             )
+        if chain.meta.get("urdf"):
+            rec.poses.extend(_urdf_visuals(chain, f"{base_path}/frames", rec.notes))
         if sub:  # each leg's foot path
             rec.polylines.append(
                 Polyline(f"{base_path}/foot_path", p_tool, 0.25 * radius, C_PATH, K)
@@ -751,6 +754,81 @@ def _robot_items(
             rec.points.append(
                 PointTrack(f"{world}/robot/tool", t, p_tool[:, None], 1.5 * radius, C_TOOL, K)
             )
+
+
+def _rpy_matrix(r: float, p: float, y: float) -> FloatArray:
+    """URDF ``rpy``: R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _floats(text: str | None, n: int, default: float = 0.0) -> list[float]:
+    vals = [float(v) for v in (text or "").split()]
+    return vals + [default] * (n - len(vals)) if len(vals) < n else vals[:n]
+
+
+def _urdf_visuals(robot: Robot, frames_path: str, notes: list[str]) -> list[PoseTrack]:
+    """The ``<visual>`` geometry of a URDF robot, each a static child of its link's frame entity:
+    boxes, cylinders (as capsules) and spheres drawn as given; meshes drawn from the file when it
+    exists on this machine (plain or ``file://`` path), else noted and left to the link capsule."""
+    import xml.etree.ElementTree as ET
+    from pathlib import Path
+
+    spec = robot.spec
+    text = getattr(spec, "urdf", None)
+    if not text:
+        return []
+    model = robot.model
+    index: dict[str, int] = {}
+    for f in model.frames:  # the base link: a body frame on the universe joint
+        if f.parentJoint == 0 and str(f.type).endswith("BODY"):
+            index.setdefault(f.name, 0)
+    for k, fid in enumerate(robot.link_frames, start=1):
+        index[model.frames[fid].name] = k
+    out: list[PoseTrack] = []
+    for link in ET.fromstring(text).iter("link"):
+        k = index.get(link.get("name", ""))
+        if k is None:
+            continue
+        for j, visual in enumerate(link.findall("visual")):
+            origin = visual.find("origin")
+            xyz = np.array(_floats(origin.get("xyz") if origin is not None else None, 3))
+            R = _rpy_matrix(*_floats(origin.get("rpy") if origin is not None else None, 3))
+            geom = visual.find("geometry")
+            shape = geom[0] if geom is not None and len(geom) else None
+            if shape is None:
+                continue
+            path = f"{frames_path}/{k}/visual_{j}"
+            kw: dict[str, Any] = {}
+            p = xyz
+            if shape.tag == "box":
+                size = _floats(shape.get("size"), 3)
+                kw = {"geometry": "box", "half_size": tuple(0.5 * v for v in size)}
+            elif shape.tag == "cylinder":
+                length, r = float(shape.get("length", "0")), float(shape.get("radius", "0"))
+                p = xyz - R @ np.array([0.0, 0.0, 0.5 * length])
+                kw = {"geometry": "capsule", "length": length, "radius": r}
+            elif shape.tag == "sphere":
+                r = float(shape.get("radius", "0"))
+                kw = {"geometry": "capsule", "length": 0.0, "radius": r}
+            elif shape.tag == "mesh":
+                name = shape.get("filename", "")
+                local = Path(name[7:] if name.startswith("file://") else name)
+                if not local.is_file():
+                    notes.append(f"URDF mesh {name!r} of link {link.get('name')!r} not found here")
+                    continue
+                scale = _floats(shape.get("scale"), 3, 1.0)
+                kw = {"geometry": "mesh", "mesh": str(local), "half_size": tuple(scale)}
+            else:
+                continue
+            out.append(PoseTrack(path, None, p[None], R[None], color=C_LINK, **kw))
+    return out
 
 
 def _scene_items(

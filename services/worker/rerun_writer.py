@@ -215,6 +215,9 @@ def _log_pose(stream: rr.RecordingStream, p: PoseTrack) -> None:
             rr.Boxes3D(half_sizes=[p.half_size], colors=[(*p.color, 200)], fill_mode="solid"),
             static=True,
         )
+    elif p.geometry == "mesh":  # a URDF mesh, scaled in a child entity
+        stream.log(f"{p.path}/mesh", rr.Transform3D(scale=p.half_size), static=True)
+        stream.log(f"{p.path}/mesh", rr.Asset3D(path=p.mesh), static=True)
 
 
 def _log_motion(stream: rr.RecordingStream, m: MotionRecording) -> None:

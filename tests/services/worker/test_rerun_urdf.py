@@ -1,0 +1,78 @@
+"""A robot given as URDF is drawn with its own <visual> geometry (boxes, cylinders, spheres and
+local mesh files) attached to its animated link frames."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_rerun_writer import fake_result
+
+from legcore.kinematics import fk
+from legcore.problems.study import Motion
+from legcore.robots import build_robot
+from services.worker import rerun_writer as W
+
+OBJ = """v 0 0 0
+v 0.1 0 0
+v 0 0.1 0
+f 1 2 3
+"""
+
+
+def urdf(mesh: Path) -> str:
+    inertial = """<inertial><origin xyz="0.1 0 0"/><mass value="1"/>
+      <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.004" iyz="0" izz="0.004"/></inertial>"""
+    return f"""<robot name="vis">
+  <link name="base"><visual><geometry><box size="0.2 0.2 0.05"/></geometry></visual></link>
+  <link name="upper">{inertial}
+    <visual><origin xyz="0.15 0 0" rpy="0 1.5707963 0"/>
+      <geometry><cylinder radius="0.03" length="0.3"/></geometry></visual></link>
+  <link name="lower">{inertial}
+    <visual><geometry><sphere radius="0.04"/></geometry></visual>
+    <visual><geometry><mesh filename="file://{mesh}" scale="2 2 2"/></geometry></visual>
+    <visual><geometry><mesh filename="package://nowhere/x.stl"/></geometry></visual></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="upper"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="20" velocity="3"/></joint>
+  <joint name="j2" type="revolute"><parent link="upper"/><child link="lower"/>
+    <origin xyz="0.3 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="20" velocity="3"/></joint>
+</robot>"""
+
+
+@pytest.fixture
+def robot_and_motion(tmp_path: Path):  # type: ignore[no-untyped-def]
+    mesh = tmp_path / "tri.obj"
+    mesh.write_text(OBJ)
+    robot = build_robot({"kind": "urdf", "name": "vis", "urdf": urdf(mesh)})
+    t = np.linspace(0, 1, 20)
+    q = np.stack([np.sin(t), np.cos(t)], axis=1)
+    motion = Motion(t=t, q=q, joint_names=("j1", "j2"), tool=fk(robot, q)[:, :3, 3], robot="vis")
+    return robot, motion
+
+
+def test_urdf_visuals_are_recorded(robot_and_motion, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    robot, motion = robot_and_motion
+    path = tmp_path / "urdf.rrd"
+    W.write_recording(fake_result(motion, m=1, generations=2), path, robot=robot)
+    entities = W.read_entities(path)
+    visuals = {e: a for e, a in entities.items() if "/visual_" in e}
+    kinds = {next(iter(sorted(a)), "") for a in visuals.values() if a}
+    assert any(e.endswith("frames/0/visual_0") for e in visuals), visuals  # base box
+    assert "rerun.archetypes.Boxes3D" in kinds
+    assert "rerun.archetypes.Capsules3D" in kinds  # the cylinder and the sphere
+    assert any(e.endswith("frames/2/visual_1/mesh") and "rerun.archetypes.Asset3D" in a
+               for e, a in entities.items())  # fmt: skip
+    assert not any(e.endswith("frames/2/visual_2") for e in entities)  # missing mesh: skipped
+
+
+def test_missing_mesh_is_noted(robot_and_motion) -> None:  # type: ignore[no-untyped-def]
+    from legcore.recording import record_motion
+
+    robot, motion = robot_and_motion
+    rec = record_motion(motion, robot)
+    assert any("package://nowhere/x.stl" in n for n in rec.notes)
+    cyl = next(p for p in rec.poses if p.path.endswith("frames/1/visual_0"))
+    assert cyl.geometry == "capsule" and cyl.length == pytest.approx(0.3)
+    # the capsule starts half a length before the visual origin along the cylinder axis (x here)
+    np.testing.assert_allclose(cyl.translation[0], [0.0, 0.0, 0.0], atol=1e-6)
