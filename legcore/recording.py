@@ -793,8 +793,8 @@ def _urdf_visuals(robot: Robot, frames_path: str, notes: list[str]) -> list[Pose
         index[model.frames[fid].name] = k
     out: list[PoseTrack] = []
     for link in ET.fromstring(text).iter("link"):
-        k = index.get(link.get("name", ""))
-        if k is None:
+        k_link = index.get(link.get("name", ""))
+        if k_link is None:
             continue
         for j, visual in enumerate(link.findall("visual")):
             origin = visual.find("origin")
@@ -804,7 +804,7 @@ def _urdf_visuals(robot: Robot, frames_path: str, notes: list[str]) -> list[Pose
             shape = geom[0] if geom is not None and len(geom) else None
             if shape is None:
                 continue
-            path = f"{frames_path}/{k}/visual_{j}"
+            path = f"{frames_path}/{k_link}/visual_{j}"
             kw: dict[str, Any] = {}
             p = xyz
             if shape.tag == "box":

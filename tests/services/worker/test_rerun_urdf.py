@@ -36,7 +36,8 @@ def urdf(mesh: Path) -> str:
   <joint name="j1" type="revolute"><parent link="base"/><child link="upper"/>
     <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="20" velocity="3"/></joint>
   <joint name="j2" type="revolute"><parent link="upper"/><child link="lower"/>
-    <origin xyz="0.3 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="20" velocity="3"/></joint>
+    <origin xyz="0.3 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="20" velocity="3"/></joint>
 </robot>"""
 
 
