@@ -249,3 +249,36 @@ def test_replay_web_serves_the_viewer(stack: Stack, tmp_path: Path) -> None:
             proc.wait(10)
         except subprocess.TimeoutExpired:
             proc.kill()
+
+
+def test_cli_talks_to_the_service(stack: Stack, tmp_path: Path) -> None:
+    """`legopt submit --wait`, `status`, `results --json`; a bad spec exits 2 naming the field."""
+    import json
+    import subprocess
+    import sys
+
+    env = dict(stack.env, LEGOPT_API_URL=stack.url, LEGOPT_API_KEY=stack.key)
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(yaml.safe_dump(_spec(ROOT / "examples" / "003_quadruped_gait.yaml", 2)))
+
+    def legopt(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, "-m", "services.cli", *args],
+            env=env, cwd=ROOT, capture_output=True, text=True, timeout=300,
+        )  # fmt: skip
+
+    out = legopt("submit", str(spec), "--wait")
+    assert out.returncode == 0, out.stdout + out.stderr
+    job_id = out.stdout.split()[1]
+    assert "best vs baselines" in out.stdout and "succeeded" not in out.stderr
+    out = legopt("status")
+    assert out.returncode == 0 and job_id in out.stdout
+    out = legopt("results", job_id, "--json")
+    assert out.returncode == 0
+    doc = json.loads(out.stdout)
+    assert doc["job_id"] == job_id and len(doc["objective_names"]) == 1
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump({"problem": {"kind": "quadruped_gait"}, "budget": {"gens": 3}}))
+    out = legopt("submit", str(bad))
+    assert out.returncode == 2
+    assert "budget.gens" in out.stderr and "Extra inputs are not permitted" in out.stderr
