@@ -46,6 +46,9 @@ from services.store.settings import Settings, get_settings
 
 log = logging.getLogger("legopt.worker")
 
+#: At most this long (s) between two writes of progress rows (a checkpoint also writes them).
+PROGRESS_FLUSH_S = 0.5
+
 _WORKER_ID = f"{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
 
 
@@ -150,6 +153,8 @@ def _run_claimed(job: JobRecord, wid: str, settings: Settings, beat: _Heartbeat)
     if resumed_from is not None:
         log.info("job %s resumes from its checkpoint at generation %d", job_id, resumed_from)
 
+    pending: list[dict[str, Any]] = []  # generation rows not yet written
+    last_flush = time.monotonic()
     while not run.done:
         if beat.lost.is_set():
             raise LeaseLostError(job_id)
@@ -161,20 +166,29 @@ def _run_claimed(job: JobRecord, wid: str, settings: Settings, beat: _Heartbeat)
             return Outcome(job_id, "cancelled", resumed_from)
         t0 = time.perf_counter()
         progress = run.step()
-        with session_scope(immediate=True) as s:
-            record_generation(
-                s,
-                job_id,
-                wid,
-                generation=progress.generation,
-                n_evals=progress.n_evals,
-                best=[float(v) for v in progress.best_f],
-                wall_time_s=time.perf_counter() - t0,
-                front=_thin_front(progress.front_F),
-            )
-            if run.done or progress.generation % settings.checkpoint_every == 0:
-                blob = json.dumps(to_jsonable(run.state_dict()), allow_nan=False).encode()
-                save_checkpoint(s, job_id, wid, generation=progress.generation, state=blob)
+        pending.append(
+            {
+                "generation": progress.generation,
+                "n_evals": progress.n_evals,
+                "best": [float(v) for v in progress.best_f],
+                "wall_time_s": time.perf_counter() - t0,
+                "front": _thin_front(progress.front_F),
+            }
+        )
+        checkpoint_due = run.done or progress.generation % settings.checkpoint_every == 0
+        if checkpoint_due or time.monotonic() - last_flush >= PROGRESS_FLUSH_S:
+            # Progress rows (and the checkpoint when due) in one transaction: a generation of a
+            # few ms must not wait on a database commit, and two workers on one SQLite file must
+            # not serialise on it. Rows after the last checkpoint are re-run on resume and
+            # ignored as duplicates.
+            with session_scope(immediate=True) as s:
+                for row in pending:
+                    record_generation(s, job_id, wid, **row)
+                if checkpoint_due:
+                    blob = json.dumps(to_jsonable(run.state_dict()), allow_nan=False).encode()
+                    save_checkpoint(s, job_id, wid, generation=progress.generation, state=blob)
+            pending.clear()
+            last_flush = time.monotonic()
 
     try:
         result = finalize(prepared, run.result())

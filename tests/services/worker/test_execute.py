@@ -16,7 +16,12 @@ from legcore.optimizers import to_jsonable
 from legcore.runner import prepare
 from services.store import repository as repo
 from services.store.keys import generate_api_key
-from services.store.lifecycle import claim_job, requeue_expired, save_checkpoint
+from services.store.lifecycle import (
+    claim_job,
+    latest_checkpoint,
+    requeue_expired,
+    save_checkpoint,
+)
 from services.store.migrate import upgrade
 from services.store.repository import now_utc
 from services.store.session import reset_engine, session_scope
@@ -125,3 +130,15 @@ def test_a_cancelled_job_is_not_run(settings: Settings) -> None:
         request_cancel(s, job_id)
     assert execute.execute_job(job_id, settings, wid="w1").status == "not-claimed"
     assert _get(job_id).status == "cancelled"
+
+
+def test_progress_rows_are_all_written_when_batched(settings: Settings) -> None:
+    """Rows are flushed in batches (every 0.5 s or at a checkpoint); none is lost at the end."""
+    job_id = _job({**SPEC, "budget": {"generations": 8}}, total=8)
+    sparse = settings.with_overrides(checkpoint_every=1000)
+    assert execute.execute_job(job_id, sparse, wid="w1").status == "succeeded"
+    with session_scope() as s:
+        rows = repo.list_generations(s, job_id)
+        ckpt = latest_checkpoint(s, job_id)
+    assert [r.generation for r in rows] == list(range(1, 9))
+    assert ckpt is not None and ckpt.generation == 8  # the final state is always checkpointed
