@@ -44,11 +44,15 @@ class OptimizerSpec(_Strict):
 
 
 class Budget(_Strict):
-    """When to stop: any of the given limits (none given → the study's default generations)."""
+    """When to stop: the first of the given limits (none given → the study's default
+    generations). ``ftol``: stop when the best objective improved by less than ``ftol`` over the
+    last ``window`` generations (seed 001's stall rule)."""
 
     generations: int | None = Field(default=None, ge=1, le=100_000)
     evaluations: int | None = Field(default=None, ge=1, le=10**9)
     wall_time_s: float | None = Field(default=None, gt=0, le=7 * 24 * 3600)
+    ftol: float | None = Field(default=None, gt=0)
+    window: int = Field(default=10, ge=1, le=10_000)
 
 
 def _problem_union() -> Any:

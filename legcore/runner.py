@@ -84,10 +84,14 @@ def prepare(spec: JobSpec | dict[str, Any]) -> Prepared:
     algorithm = get_algorithm(kind, **params)
     b = spec.budget
     generations = b.generations
-    if generations is None and b.evaluations is None and b.wall_time_s is None:
+    if generations is None and b.evaluations is None and b.wall_time_s is None:  # ftol alone
         generations = study.default_generations
     termination = termination_from_budget(
-        n_gen=generations, n_evals=b.evaluations, seconds=b.wall_time_s
+        n_gen=generations,
+        n_evals=b.evaluations,
+        seconds=b.wall_time_s,
+        ftol=b.ftol,
+        window=b.window,
     )
     return Prepared(spec, study, robot, problem, algorithm, termination, generations)
 
