@@ -84,17 +84,27 @@ async def _hammer(
     url: str, key: str, paths: list[str], clients: int, per_client: int
 ) -> list[float]:
     lat: list[float] = []
+    retries: list[int] = []
     limits = httpx.Limits(max_connections=clients)
     async with httpx.AsyncClient(headers={"X-API-Key": key}, limits=limits, timeout=60) as http:
 
         async def one_client() -> None:
             for i in range(per_client):
                 t0 = time.perf_counter()
-                r = await http.get(url + paths[i % len(paths)])
+                for attempt in range(3):  # a pooled keep-alive connection the server just closed
+                    try:
+                        r = await http.get(url + paths[i % len(paths)])
+                        break
+                    except (httpx.ReadError, httpx.RemoteProtocolError):
+                        retries.append(1)
+                        if attempt == 2:
+                            raise
                 r.raise_for_status()
                 lat.append(time.perf_counter() - t0)
 
         await asyncio.gather(*(one_client() for _ in range(clients)))
+    if retries:
+        print(f"({len(retries)} requests retried after the server closed a keep-alive connection)")
     return lat
 
 
