@@ -549,15 +549,26 @@ def demo(
             sock.bind(("127.0.0.1", 0))
             port = sock.getsockname()[1]
     url = f"http://127.0.0.1:{port}"
-    console.print(f"starting the embedded LegOpt service on {url} with {workers} workers …")
+    from services.store.settings import get_settings
+
+    data_dir = Path(get_settings().data_dir)
+    data_dir.mkdir(parents=True, exist_ok=True)
+    log_path = data_dir / "demo-service.log"
+    console.print(
+        f"starting the embedded LegOpt service on {url} with {workers} workers "
+        f"(its log: {log_path}) …"
+    )
+    log = log_path.open("ab")
     server = subprocess.Popen(
         [sys.executable, "-m", "services.cli", "serve", "--port", str(port),
-         "--workers", str(workers)]
+         "--workers", str(workers)],
+        stdout=log, stderr=subprocess.STDOUT,
     )  # fmt: skip
     try:
         deadline = time.monotonic() + 120
         while True:
             if server.poll() is not None:
+                err_console.print(f"[bold red]error:[/] the service stopped; see {log_path}")
                 raise typer.Exit(code=1)
             try:
                 Client(url).health()
@@ -581,15 +592,23 @@ def demo(
                 _print_job_result(c, job)
                 failed += job["status"] != "succeeded"
         console.rule("replay")
+        console.print("the recordings are kept in the artifact store; open one in the Rerun viewer "
+                      "(add --web where there is no display):")  # fmt: skip
+        artifacts = Path(get_settings().artifact_dir)
         for label, job_id in zip(labels, ids, strict=True):
-            console.print(f"{label}: legopt replay {job_id}   (or --web without a display)")
-        console.print("while the service runs (legopt serve), results stay under ./legopt-data")
+            rrd = artifacts / job_id / "recording.rrd"
+            console.print(f"  {label}: .venv/bin/legopt replay {rrd}")
+        console.print(
+            f"everything stays under {data_dir}; with `legopt serve` running, "
+            "`legopt replay JOB_ID` and `legopt results JOB_ID` fetch them over HTTP"
+        )
         if failed:
             raise typer.Exit(code=1)
     finally:
         from services.embedded import stop_processes
 
         stop_processes([server], timeout=30)
+        log.close()
 
 
 def main() -> None:  # pragma: no cover - console script entry
