@@ -14,14 +14,21 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, model_validator
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
 from legcore.optimizers import get_algorithm
 from legcore.problems.registry import studies
 from legcore.problems.study import StudyParams
 from legcore.robots.spec import RobotSpec
 
-__all__ = ["Budget", "JobSpec", "OptimizerSpec", "parse_job_spec", "ProblemSpec"]
+__all__ = [
+    "Budget",
+    "JobSpec",
+    "OptimizerSpec",
+    "ProblemSpec",
+    "parse_job_spec",
+    "spec_error_locations",
+]
 
 
 class _Strict(BaseModel):
@@ -90,3 +97,17 @@ def parse_job_spec(data: dict[str, Any] | JobSpec) -> JobSpec:
     if isinstance(data, JobSpec):
         return data
     return _ADAPTER.validate_python(data)
+
+
+def spec_error_locations(exc: ValidationError, data: Any) -> list[tuple[list[str | int], str]]:
+    """``(loc, message)`` of each error of a job spec, without the study kind pydantic inserts
+    in ``problem`` locations (``problem.swing_energy.obstacle`` → ``problem.obstacle``)."""
+    problem = data.get("problem") if isinstance(data, dict) else None
+    kind = problem.get("kind") if isinstance(problem, dict) else None
+    out = []
+    for err in exc.errors():
+        loc = list(err["loc"])
+        if kind is not None and loc[:2] == ["problem", kind]:
+            del loc[1]
+        out.append((loc, str(err["msg"])))
+    return out

@@ -7,7 +7,7 @@ call. Both produce the same :class:`RunResult` for the same spec and seed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -135,7 +135,6 @@ class RunResult:
     extras: dict[str, Any]
     optimizer: dict[str, Any]
     objective_names: tuple[str, ...]
-    baseline_x: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """``result.json``: spec, status, best, pareto, baselines, history, extras, optimizer."""

@@ -44,12 +44,14 @@ def bad_input(message: str) -> typer.Exit:
     return typer.Exit(code=2)
 
 
-def validation_lines(exc: ValidationError, prefix: str = "") -> list[str]:
-    """``field.path: reason`` for each error of a pydantic ValidationError."""
+def validation_lines(exc: ValidationError, data: Any = None) -> list[str]:
+    """``field.path: reason`` for each error of a job spec's ValidationError."""
+    from legcore.jobspec import spec_error_locations
+
     out = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err["loc"])
-        out.append(f"{prefix}{loc}: {err['msg']}" if loc else f"{prefix}{err['msg']}")
+    for loc, msg in spec_error_locations(exc, data):
+        where = ".".join(str(p) for p in loc)
+        out.append(f"{where}: {msg}" if where else msg)
     return out
 
 
@@ -150,7 +152,7 @@ def run(
         spec = parse_job_spec(data)
         prepared = prepare(spec)
     except ValidationError as exc:
-        for line in validation_lines(exc):
+        for line in validation_lines(exc, data):
             err_console.print(f"[bold red]error:[/] {line}")
         raise typer.Exit(code=2) from None
     except ValueError as exc:

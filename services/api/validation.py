@@ -17,7 +17,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from legcore.jobspec import JobSpec, parse_job_spec
+from legcore.jobspec import JobSpec, parse_job_spec, spec_error_locations
 from legcore.robots import LeggedRobot, Robot, build_robot, catalog, parse_robot_spec
 from legcore.runner import JobSize, job_size, prepare
 from services.api.errors import (
@@ -162,14 +162,10 @@ def resolve_robot(doc: dict[str, Any], lookup: RobotLookup, prefix: Loc) -> dict
 def _job_errors(exc: ValidationError, doc: dict[str, Any], prefix: Loc) -> list[dict[str, Any]]:
     """Pydantic errors of a job spec, without the study kind pydantic puts in ``problem``
     locations (``problem.swing_energy.obstacle`` -> ``problem.obstacle``)."""
-    problem = doc.get("problem")
-    kind = problem.get("kind") if isinstance(problem, dict) else None
     errors = clean_pydantic_errors(exc, prefix)
     n = len(prefix)
-    for err in errors:
-        loc = err["loc"]
-        if kind is not None and loc[n : n + 2] == ["problem", kind]:
-            del loc[n + 1]
+    for err, (loc, _) in zip(errors, spec_error_locations(exc, doc), strict=True):
+        err["loc"] = [*err["loc"][:n], *loc]
     return errors
 
 

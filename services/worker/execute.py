@@ -25,6 +25,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from legcore.jobspec import spec_error_locations
 from legcore.optimizers import from_jsonable, to_jsonable
 from legcore.runner import RunResult, finalize, prepare
 from services.store.artifacts import ArtifactStore
@@ -60,13 +61,13 @@ def worker_id() -> str:
     return _WORKER_ID
 
 
-def format_user_error(exc: BaseException) -> str:
+def format_user_error(exc: BaseException, spec: Any = None) -> str:
     """A message naming the field and the reason, from a validation or value error."""
     if isinstance(exc, ValidationError):
         parts = []
-        for err in exc.errors()[:10]:
-            loc = ".".join(str(p) for p in err["loc"])
-            parts.append(f"{loc}: {err['msg']}" if loc else err["msg"])
+        for loc, msg in spec_error_locations(exc, spec)[:10]:
+            where = ".".join(str(p) for p in loc)
+            parts.append(f"{where}: {msg}" if where else msg)
         return "invalid job spec: " + "; ".join(parts)
     return f"invalid job spec: {exc}"
 
@@ -141,7 +142,7 @@ def _run_claimed(job: JobRecord, wid: str, settings: Settings, beat: _Heartbeat)
     try:
         prepared = prepare(job.spec)
     except (ValidationError, ValueError, KeyError) as exc:
-        message = format_user_error(exc)
+        message = format_user_error(exc, job.spec)
         _fail(job_id, wid, message)
         return Outcome(job_id, "failed", message=message)
 

@@ -53,6 +53,9 @@ def test_bad_specs_exit_2_naming_the_field(tmp_path: Path) -> None:
     res = runner.invoke(app, ["run", str(spec), "--out", str(tmp_path / "o")])
     assert res.exit_code == 2
     assert "colour: Extra inputs are not permitted" in res.output
+    spec = _spec(tmp_path, "003_quadruped_gait.yaml", problem={"kind": "quadruped_gait", "stpe": 1})
+    res = runner.invoke(app, ["run", str(spec), "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2 and "problem.stpe: Extra inputs are not permitted" in res.output
     spec = _spec(tmp_path, "003_quadruped_gait.yaml", robot="r2d2")
     res = runner.invoke(app, ["run", str(spec), "--out", str(tmp_path / "o")])
     assert res.exit_code == 2 and "robot" in res.output and "r2d2" in res.output

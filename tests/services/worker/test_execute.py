@@ -70,7 +70,7 @@ def test_unrunnable_spec_fails_with_the_field_and_the_worker_survives(settings: 
     assert outcome.status == "failed"
     job = _get(job_id)
     assert job.status == "failed"
-    assert "problem.quadruped_gait.step_lenght" in job.error_message
+    assert "problem.step_lenght" in job.error_message
     assert "Extra inputs are not permitted" in job.error_message
 
 

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_rerun_writer import fake_result
 
 from legcore.kinematics import fk
 from legcore.problems.study import Motion
 from legcore.robots import build_robot
 from services.worker import rerun_writer as W
+from tests.recording_fixtures import fake_result
 
 OBJ = """v 0 0 0
 v 0.1 0 0

@@ -17,44 +17,23 @@ import yaml
 from rerun.chunk import RrdReader
 
 from legcore import recording as R
-from legcore.kinematics import fk, frames
-from legcore.problems.study import Box, Motion, Solution
+from legcore.kinematics import frames
+from legcore.problems.study import Box, Motion
 from legcore.robots import catalog
 from services.worker import rerun_writer as W
+from tests.recording_fixtures import arm_motion, fake_result
 
+SCENE = {
+    "targets": np.array([[0.5, 0.0, 0.5], [0.6, 0.0, 0.5]]),
+    "obstacles": [Box((0.3, 0.0, 0.5), (0.03, 0.02, 0.013))],
+    "support_polygon": np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]),
+}
 EXAMPLES = sorted((Path(__file__).resolve().parents[3] / "examples").glob("*.yaml"))
 
 
 # ---------------------------------------------------------------------------------------------
 # fixtures and readers
 # ---------------------------------------------------------------------------------------------
-
-
-def arm_motion(K: int = 5000, T: float = 3.0) -> Motion:
-    robot = catalog.get("articulated_5dof")
-    t = np.linspace(0.0, T, K)
-    q = robot.home + 0.3 * np.sin(np.outer(t, np.arange(1, 6)))
-    qd = np.gradient(q, t, axis=0)
-    qdd = np.gradient(qd, t, axis=0)
-    power = qd * qdd  # any numbers will do here
-    return Motion(
-        t=t,
-        q=q,
-        joint_names=tuple(f"q{i + 1}" for i in range(5)),
-        qd=qd,
-        qdd=qdd,
-        jerk=np.gradient(qdd, t, axis=0),
-        tau=qdd.copy(),
-        power=power,
-        energy=R._cumtrapz(np.abs(power), t).sum(axis=1),
-        tool=fk(robot, q)[:, :3, 3],
-        robot="articulated_5dof",
-        scene={
-            "targets": np.array([[0.5, 0.0, 0.5], [0.6, 0.0, 0.5]]),
-            "obstacles": [Box((0.3, 0.0, 0.5), (0.03, 0.02, 0.013))],
-            "support_polygon": np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]),
-        },
-    )
 
 
 def hexapod_like_motion(K: int) -> Motion:
@@ -81,45 +60,6 @@ def hexapod_like_motion(K: int) -> Motion:
         robot="citedi_hexapod",
         legs=legs,
         scene={"body_T": body, "ground_z": -0.07},
-    )
-
-
-def fake_result(
-    motion: Motion | None,
-    *,
-    m: int = 3,
-    generations: int = 10,
-    baselines: dict[str, Motion] | None = None,
-    front_size: int = 50,
-) -> SimpleNamespace:
-    """Duck-typed RunResult."""
-    rng = np.random.default_rng(0)
-    history = [
-        {
-            "generation": g,
-            "n_evals": 100 * g,
-            "elapsed": 0.1 * g,
-            "best_f": [1.0 / g + j for j in range(m)],
-            "best_cv": 0.0,
-            "front_size": front_size,
-            "ideal": [0.0] * m,
-            "nadir": [1.0] * m,
-        }
-        for g in range(1, generations + 1)
-    ]
-    return SimpleNamespace(
-        spec=None,
-        status="succeeded",
-        best=Solution(x=np.zeros(2), objectives={}, metrics={}, motion=motion),
-        pareto=[{"x": [0.0], "objectives": list(f)} for f in rng.random((front_size, m))],
-        baselines={
-            k: Solution(x=None, objectives={}, metrics={}, motion=v)
-            for k, v in (baselines or {}).items()
-        },
-        history=history,
-        extras={},
-        optimizer={"kind": "moead"},
-        objective_names=tuple(f"f{j + 1}" for j in range(m)),
     )
 
 
@@ -169,7 +109,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, SimpleNames
     """One recording of a 3-objective run with per-generation fronts and two baselines."""
     path = tmp_path_factory.mktemp("rec") / "job.rrd"
     res = fake_result(
-        arm_motion(K=5000),
+        arm_motion(K=5000, **SCENE),
         generations=20,
         baselines={"parabolic": arm_motion(K=600), "min energy": arm_motion(K=300)},
     )
