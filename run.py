@@ -2,10 +2,13 @@
 """One entry point for a fresh clone: creates `.venv`, installs the lock, runs a task.
 
     python3 run.py demo          # the main job on the embedded default (no Redis/Postgres)
-    python3 run.py test [ARGS]   # the test suite (ARGS go to pytest)
+    python3 run.py test [ARGS]   # the test suite (ARGS go to pytest; see run_tests)
     python3 run.py bench         # the benchmark scripts in benchmarks/
     python3 run.py legopt ARGS   # any `legopt` command inside the environment
 
+The first run installs `requirements.lock` as wheels only, with no dependency resolution (the
+lock pins every package) and no up-front byte-compiling, showing one progress line; pip's
+output is kept in .venv/install.log.
 Only the standard library is used here, so it runs on a bare Python 3.11.
 """
 
@@ -13,8 +16,10 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import subprocess
 import sys
+import time
 import venv
 from pathlib import Path
 
@@ -22,6 +27,7 @@ ROOT = Path(__file__).resolve().parent
 VENV = ROOT / ".venv"
 LOCK = ROOT / "requirements.lock"
 STAMP = VENV / ".legopt-installed"
+LOG = VENV / "install.log"
 
 
 def _venv_bin(name: str) -> Path:
@@ -35,6 +41,48 @@ def _fingerprint() -> str:
     return h.hexdigest()
 
 
+def locked_packages() -> list[str]:
+    """The ``name==version`` lines of the lock (comments and blank lines dropped)."""
+    lines = (line.split("#", 1)[0].strip() for line in LOCK.read_text().splitlines())
+    return [line for line in lines if line]
+
+
+def _pip(args: list[str], total: int, what: str) -> None:
+    """Run ``pip ARGS`` in the venv with one progress line (``[k/total] name``); the full
+    output goes to .venv/install.log, whose tail is printed if pip fails."""
+    cmd = [str(_venv_bin("python")), "-m", "pip", "--disable-pip-version-check", *args]
+    tty = sys.stdout.isatty()
+    done, t0, last = 0, time.monotonic(), 0.0
+    with LOG.open("a") as log:
+        log.write(f"$ {' '.join(cmd)}\n")
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            log.write(line)
+            m = re.match(r"(Collecting|Obtaining|Processing) (\S+)", line)
+            if m:
+                done += 1
+                name = m.group(2).split("==")[0]
+                msg = f"run.py: {what} [{done}/{total}] {name}"
+            elif line.startswith("Installing collected packages"):
+                msg = f"run.py: {what}: unpacking {done} packages"
+            else:
+                continue
+            now = time.monotonic()
+            if tty:
+                print(f"\r\033[K{msg} ({now - t0:.0f} s)", end="", flush=True)
+            elif now - last > 15 or "unpacking" in msg:
+                print(f"{msg} ({now - t0:.0f} s)", flush=True)
+                last = now
+        code = proc.wait()
+    if tty:
+        print()
+    if code:
+        tail = LOG.read_text().splitlines()[-30:]
+        print("\n".join(tail), file=sys.stderr)
+        sys.exit(f"run.py: pip failed ({what}); full output in {LOG}")
+
+
 def ensure_env() -> None:
     """Create the virtual environment and install the locked dependencies (idempotent)."""
     if sys.version_info[:2] != (3, 11):
@@ -45,12 +93,62 @@ def ensure_env() -> None:
     want = _fingerprint()
     if STAMP.exists() and STAMP.read_text() == want:
         return
-    py = str(_venv_bin("python"))
-    pip = [py, "-m", "pip", "--disable-pip-version-check", "-q"]
-    print("run.py: installing locked dependencies (first run takes a minute)", flush=True)
-    subprocess.run([*pip, "install", "-r", str(LOCK)], check=True)
-    subprocess.run([*pip, "install", "--no-deps", "-e", str(ROOT)], check=True)
+    t0 = time.monotonic()
+    packages = locked_packages()
+    print(f"run.py: installing {len(packages)} locked packages into .venv (wheels only; "
+          "once)", flush=True)  # fmt: skip
+    # The lock pins every package: no resolver pass (--no-deps), only wheels (no builds), and
+    # no byte-compiling of every module up front (Python compiles what it imports, once).
+    _pip(["install", "--no-deps", "--only-binary=:all:", "--no-compile", "-r", str(LOCK)],
+         len(packages), "installing")  # fmt: skip
+    # LegOpt itself, editable: its code stays in this checkout; `.venv/bin/legopt` is created.
+    _pip(["install", "--no-deps", "-e", str(ROOT)], 1, "installing legopt")
     STAMP.write_text(want)
+    print(f"run.py: environment ready in {time.monotonic() - t0:.0f} s", flush=True)
+
+
+#: pytest options whose value is the next argument (so it is not taken for a test path).
+_VALUE_OPTIONS = {
+    "-p", "-o", "-c", "-W", "--rootdir", "--confcutdir", "--basetemp", "--junitxml",
+    "--durations", "--tb", "--maxfail", "--dist",
+}  # fmt: skip
+#: Options that choose which tests run, or how many processes run them.
+_SELECTING = {"-k", "-m", "-n", "--lf", "--last-failed", "--ff", "--sw", "--stepwise",
+              "--co", "--collect-only", "--numprocesses"}  # fmt: skip
+
+
+def selects_tests(args: list[str]) -> bool:
+    """True when pytest ARGS name tests, markers, keywords or a process count."""
+    skip = False
+    for arg in args:
+        if skip:
+            skip = False
+            continue
+        name = arg.split("=", 1)[0]
+        if name in _VALUE_OPTIONS:
+            skip = "=" not in arg
+            continue
+        short = arg[:2] in {"-k", "-m", "-n"} and not arg.startswith("--")
+        if name in _SELECTING or short or not arg.startswith("-"):
+            return True
+    return False
+
+
+def run_tests(py: str, args: list[str]) -> int:
+    """The test suite. ARGS that choose tests run as given (one pytest). Otherwise two phases,
+    each spread over the machine's cores by test file (pytest-xdist): the unit tests, then the
+    real-process tests (``-m integration``: API, workers, brokers, databases, browser), which
+    each start their own services on free ports. Returns the first failing exit code."""
+    if selects_tests(args):
+        return subprocess.run([py, "-m", "pytest", *args], cwd=ROOT).returncode
+    n = str(max(1, min(os.cpu_count() or 1, 4)))
+    code = 0
+    for marker in ("not integration", "integration"):
+        print(f"run.py: pytest -m {marker!r} on {n} processes", flush=True)
+        cmd = [py, "-m", "pytest", "-m", marker, "-n", n, "--dist", "loadfile", *args]
+        rc = subprocess.run(cmd, cwd=ROOT).returncode
+        code = code or (0 if rc == 5 else rc)  # 5: nothing collected
+    return code
 
 
 def main(argv: list[str]) -> int:
@@ -61,8 +159,8 @@ def main(argv: list[str]) -> int:
     ensure_env()
     py = str(_venv_bin("python"))
     if task == "test":
-        cmd = [py, "-m", "pytest", *rest]
-    elif task == "demo":
+        return run_tests(py, rest)
+    if task == "demo":
         cmd = [str(_venv_bin("legopt")), "demo", *rest]
     elif task == "bench":
         cmd = [py, str(ROOT / "benchmarks" / "run_all.py"), *rest]

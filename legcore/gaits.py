@@ -466,6 +466,10 @@ def tripod_triangle(
     return support_triangle(F[..., 0, :], F[..., 1, :], F[..., 2, :], formula=formula)
 
 
+UNBOUNDED_SPANS = 100.0
+"""A tripod stability distance beyond this many tripod spans is reported as unbounded (inf)."""
+
+
 def tripod_stability(
     front: ArrayLike,
     middle: ArrayLike,
@@ -488,7 +492,10 @@ def tripod_stability(
         axis: measuring direction (2,) in the ground plane (normalised here).
 
     Returns:
-        ``(S_f, S_b)`` (m); ±inf where a diagonal is parallel to ``axis``.
+        ``(S_f, S_b)`` (m); ±inf where the distance is unbounded: a diagonal parallel to
+        ``axis``, or so nearly parallel that the distance exceeds ``UNBOUNDED_SPANS`` (100) times
+        the tripod's span (the largest of |front − middle|, |back − middle|, |c − middle|) — a
+        number like 16 642.8 m measures how parallel the lines are, not how stable the body is.
     """
     f, m, b = _xy(front, "front"), _xy(middle, "middle"), _xy(back, "back")
     C = np.zeros(2) if c is None else _xy(c, "c")
@@ -504,6 +511,11 @@ def tripod_stability(
         denom = np.abs(_cross(d, np.broadcast_to(u, d.shape)))
         with np.errstate(divide="ignore", invalid="ignore"):
             dist = np.abs(side_c) / denom
+        span = np.maximum(
+            np.linalg.norm(d, axis=-1),
+            np.maximum(np.linalg.norm(other - m, axis=-1), np.linalg.norm(C - m, axis=-1)),
+        )
+        dist = np.where(dist > UNBOUNDED_SPANS * span, np.inf, dist)
         dist = np.where(side_c == 0.0, 0.0, dist)
         return np.where(side_c * side_o >= 0.0, dist, -dist)
 

@@ -3,7 +3,7 @@
     {"robot": "calderon_leg",                      # catalog name, or an inline robot spec
      "problem": {"kind": "swing_energy", ...},     # study kind + its parameters
      "optimizer": {"kind": "ga", "params": {...}}, # optional: the seed's own by default
-     "seed": 1,
+     "seed": 1, "tags": ["study-a"],               # optional: labels for the dashboard
      "budget": {"generations": 100},               # optional: the seed's own by default
      "record": true}
 
@@ -36,10 +36,16 @@ class _Strict(BaseModel):
 
 
 class OptimizerSpec(_Strict):
-    """An optimiser by kind with its parameters (see docs/optimizers.md for each kind's)."""
+    """An optimiser by kind with its parameters (see docs/optimizers.md for each kind's).
+
+    ``refine``: polish the best solution by gradient-based SLSQP on the problem's continuous
+    relaxation (at most ``refine_max_iter`` iterations) before it is decoded; single-objective
+    problems only (:mod:`legcore.optimizers.refine`; never returns a worse point)."""
 
     kind: Literal["ga", "hka", "moead", "nsga2"]
     params: dict[str, Any] = Field(default_factory=dict)
+    refine: bool = False
+    refine_max_iter: int = Field(default=100, ge=1, le=1000)
 
     @model_validator(mode="after")
     def _params_valid(self) -> OptimizerSpec:
@@ -73,11 +79,21 @@ def _problem_union() -> Any:
 ProblemSpec = _problem_union()
 
 
+Tag = Annotated[str, Field(min_length=1, max_length=40, pattern=r"^[A-Za-z0-9_.:-]+$")]
+"""A job tag: letters, digits, ``_ - . :`` (no spaces or commas), 1–40 characters."""
+
+
 class JobSpec(_Strict):
     """A whole job. ``robot`` None means the study's default robot; ``optimizer`` None the
     seed's algorithm and settings; an empty ``budget`` the seed's number of generations."""
 
     name: str | None = Field(default=None, max_length=200)
+    tags: list[Tag] = Field(
+        default_factory=list,
+        max_length=16,
+        description="labels to find the job by (dashboard filter and search): up to 16, each "
+        "1-40 characters of letters, digits, '_', '-', '.', ':'",
+    )
     robot: str | RobotSpec | None = None
     if TYPE_CHECKING:
         problem: StudyParams

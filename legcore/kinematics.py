@@ -12,9 +12,11 @@ Conventions (see ``docs/kinematics.md``):
 
 Fast path: one numba kernel loops over the (flattened) batch on :class:`~legcore.robots.Chain`
 arrays, which are taken from the Pinocchio model, so DH and URDF robots share it. Joint ``i``'s
-world pose is ``pose_{i-1} · (R_i, p_i) · exp(axis_i q_i)``. The per-sample Pinocchio loops
-:func:`fk_reference`, :func:`frames_reference` and :func:`jacobian_reference` are the reference
-the fast path is tested against (equal to ~1e-15).
+world pose is ``pose_{i-1} · (R_i, p_i) · exp(axis_i q_i)``; the joint sines/cosines of a block
+of samples are computed in one vectorisable loop (``legcore.dynamics._sincos``, ~1e-16 from
+libm). Positions only (no 4×4 poses): :func:`legcore.chain_points.chain_points`. The per-sample
+Pinocchio loops :func:`fk_reference`, :func:`frames_reference` and :func:`jacobian_reference`
+are the reference the fast path is tested against (equal to ~1e-15).
 
 Inverse kinematics: :func:`ik` dispatches on ``robot.ik_family`` to the closed forms
 (``legcore.ik.puma560``, ``legcore.ik.arm5``, ``legcore.ik.leg3``, ``legcore.ik.leg2``) and to
@@ -36,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from legcore.dynamics import _BLOCK, _sincos
 from legcore.robots.model import Robot
 from legcore.robots.spec import DHRobotSpec
 
@@ -144,7 +147,13 @@ def _chain_kernel(
     n = q.shape[1]
     Rw = np.empty((n, 3, 3))  # world rotation of joint frame i
     pw = np.empty((n, 3))  # world origin of joint frame i
+    qflat = q.reshape(-1)
+    C = np.empty(_BLOCK * n)  # cos / sin of a block of samples' joint angles
+    S = np.empty(_BLOCK * n)
     for s in range(N):
+        if s % _BLOCK == 0:
+            _sincos(qflat, s * n, min(s + _BLOCK, N) * n, C, S)
+        jb = (s % _BLOCK) * n
         P00 = 1.0
         P01 = 0.0
         P02 = 0.0
@@ -185,8 +194,8 @@ def _chain_kernel(
                 P20, P21, P22 = b20, b21, b22
             else:
                 # Rodrigues: E = exp([a]× q)
-                cq = math.cos(qi)
-                sq = math.sin(qi)
+                cq = C[jb + i]
+                sq = S[jb + i]
                 vq = 1.0 - cq
                 e00 = cq + ax * ax * vq
                 e01 = ax * ay * vq - az * sq

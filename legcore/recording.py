@@ -9,7 +9,9 @@ Entity paths (``docs/recording.md`` has the full table):
 
 - ``signals/<q|qd|qdd|jerk|tau|power>/<joint>`` — one scalar series per joint on the ``time``
   timeline (s); ``signals/energy/<joint>`` the cumulative ``∫|P_i| dt`` of that joint (J) and
-  ``signals/energy/total`` the motion's own cumulative energy (``Motion.energy``).
+  ``signals/energy/total`` the motion's own cumulative energy (``Motion.energy``). The joints
+  of one signal share their samples and are logged as one entity, ``signals/<kind>``
+  (``Series.group``).
 - ``world/robot[/<leg>]/frames/<k>`` — link frame ``k`` (0 = base) in the world over time
   (``legcore.kinematics.frames``, one batched call for all displayed samples);
   ``.../frames/<k>/link`` — the link drawn as a capsule from frame origin ``k-1`` to frame
@@ -33,7 +35,8 @@ shown with at most ``max_samples`` (default 2000) of them:
 - scalar signals use **min/max decimation**: the interior samples are cut into
   ``(max_samples - 2) // 2`` equal buckets and each bucket keeps the samples of its minimum and
   maximum, plus the first and last sample — so peaks (τ_max, jerk spikes) survive; every kept
-  value is an original sample at its original time;
+  value is an original sample at its original time; the joints of one signal keep the union
+  of their samples (:func:`shared_minmax_indices`, still at most ``max_samples``);
 - poses, the moving tool point, the path and time-varying scene items use a **uniform stride**:
   ``round(linspace(0, K-1, max_samples))``, endpoints included.
 
@@ -55,6 +58,7 @@ the last generation, and ``FrontTrack.source`` says ``"final_only"``.
 from __future__ import annotations
 
 import math
+import os
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -62,6 +66,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from legcore.resource_paths import ResourceRefused, read_resource
 
 if TYPE_CHECKING:
     from legcore.problems.study import Motion, Solution
@@ -72,6 +78,8 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_MAX_BYTES",
     "DEFAULT_MAX_SAMPLES",
+    "MAX_MESH_BYTES",
+    "MESH_SUFFIXES",
     "MIN_SAMPLES",
     "SIGNALS",
     "BoxSet",
@@ -92,12 +100,20 @@ __all__ = [
     "quaternion_xyzw",
     "record_motion",
     "record_run",
+    "shared_minmax_indices",
     "stride_indices",
     "unique_parts",
 ]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+#: Directories that URDF mesh names may resolve into (:mod:`legcore.resource_paths`).
+MeshRoots = Sequence[str | os.PathLike[str]]
+
+#: Mesh formats a recording can show (Rerun ``Asset3D``); other names are noted, never opened.
+MESH_SUFFIXES = frozenset({".stl", ".obj", ".glb", ".gltf"})
+#: Largest mesh file embedded in a recording (bytes).
+MAX_MESH_BYTES = 8_000_000
 
 #: Samples per displayed signal / pose track unless told otherwise.
 DEFAULT_MAX_SAMPLES = 2000
@@ -135,7 +151,10 @@ C_GROUND = (160, 140, 110)
 class Series:
     """One scalar signal on a timeline: ``index`` (N,) is time in s (``timeline == "time"``) or
     the generation number (``"generation"``); ``values`` (N,) in ``unit``. ``source_samples`` is
-    the length before downsampling."""
+    the length before downsampling. ``group``: the entity under which the writer logs this
+    series together with its siblings of the same group (the joints of one signal, which share
+    their ``index``): one ``Scalars`` batch per sample, one series per joint; None: its own
+    entity at ``path``."""
 
     path: str
     timeline: str
@@ -144,6 +163,7 @@ class Series:
     label: str
     unit: str
     source_samples: int
+    group: str | None = None
 
     @property
     def n_samples(self) -> int:
@@ -157,7 +177,10 @@ class PoseTrack:
 
     ``geometry`` is what is drawn in the entity's own frame: ``"axes"`` (a link frame, axes of
     ``axis_length``), ``"capsule"`` (a link: from the origin along +z, ``length``, ``radius``),
-    ``"box"`` (centred, ``half_size``) or ``"mesh"`` (the file ``mesh``, scale ``half_size``)."""
+    ``"box"`` (centred, ``half_size``) or ``"mesh"`` (the bytes ``mesh_data`` of the file
+    ``mesh``, read inside the mesh roots by :mod:`legcore.resource_paths`; scale ``half_size``).
+    A writer logs ``mesh_data`` and never opens ``mesh``: it only names the file and its format.
+    """
 
     path: str
     t: FloatArray | None
@@ -170,7 +193,8 @@ class PoseTrack:
     half_size: tuple[float, float, float] = (0.0, 0.0, 0.0)
     color: tuple[int, int, int] = C_LINK
     source_samples: int = 1
-    mesh: str = ""  # geometry "mesh": a local mesh file (URDF visual), scaled by ``half_size``
+    mesh: str = ""  # geometry "mesh": the mesh file's real path (for its name and format only)
+    mesh_data: bytes = b""  # geometry "mesh": its contents, read inside the mesh roots
 
     @property
     def n_samples(self) -> int:
@@ -337,6 +361,24 @@ def minmax_indices(y: FloatArray, max_samples: int = DEFAULT_MAX_SAMPLES) -> Int
     minimum and maximum (NaN ignored). At most ``max_samples`` sorted distinct indices."""
     y = np.asarray(y, dtype=float)
     return minmax_columns(y[:, None], max_samples)[0]
+
+
+def shared_minmax_indices(Y: FloatArray, max_samples: int = DEFAULT_MAX_SAMPLES) -> IntArray:
+    """One set of indices for all columns of ``Y`` (K, n) (the joints of one signal, logged as
+    one entity): all of them when ``K <= max_samples``; else the union over columns of each
+    column's :func:`minmax_columns` at the largest per-column cap (at least 4) whose union has
+    at most ``max_samples`` sorted distinct indices — every column keeps its bucket minima and
+    maxima, every kept value is an original sample."""
+    Y = np.asarray(Y, dtype=float)
+    K, n = Y.shape
+    if K <= max_samples:
+        return np.arange(K, dtype=np.int64)
+    per = max_samples
+    while True:  # joints often peak together: shrink the per-joint cap only as far as needed
+        idx = np.unique(np.concatenate(minmax_columns(Y, per)))
+        if idx.size <= max_samples or per <= 4:
+            return idx
+        per = max(4, min(per - 2, int(per * max_samples / idx.size)))
 
 
 def minmax_columns(Y: FloatArray, max_samples: int = DEFAULT_MAX_SAMPLES) -> list[IntArray]:
@@ -530,10 +572,14 @@ def _signal_series(motion: Motion, prefix: str, max_samples: int, parts: list[st
     out: list[Series] = []
 
     def add(paths: list[str], Y: FloatArray, labels: list[str], unit: str) -> None:
-        for path, label, j, idx in zip(
-            paths, labels, range(Y.shape[1]), minmax_columns(Y, max_samples), strict=True
-        ):
-            out.append(Series(path, "time", t[idx], Y[idx, j], label, unit, K))
+        if len(paths) == 1:  # the total energy: an entity of its own
+            idx = minmax_columns(Y, max_samples)[0]
+            out.append(Series(paths[0], "time", t[idx], Y[idx, 0], labels[0], unit, K))
+            return
+        idx = shared_minmax_indices(Y, max_samples)
+        group = paths[0].rsplit("/", 1)[0]
+        for path, label, j in zip(paths, labels, range(Y.shape[1]), strict=True):
+            out.append(Series(path, "time", t[idx], Y[idx, j], label, unit, K, group))
 
     names = motion.joint_names
     for attr, unit, label in SIGNALS:
@@ -649,7 +695,12 @@ def _pose_track(
 
 
 def _robot_items(
-    robot: Robot | LeggedRobot, motion: Motion, idx: IntArray, world: str, rec: MotionRecording
+    robot: Robot | LeggedRobot,
+    motion: Motion,
+    idx: IntArray,
+    world: str,
+    rec: MotionRecording,
+    mesh_roots: MeshRoots = (),
 ) -> None:
     from legcore.kinematics import fk, frames
 
@@ -745,7 +796,7 @@ def _robot_items(
                 )
             )
         if chain.meta.get("urdf"):
-            rec.poses.extend(_urdf_visuals(chain, f"{base_path}/frames", rec.notes))
+            rec.poses.extend(_urdf_visuals(chain, f"{base_path}/frames", rec.notes, mesh_roots))
         if sub:  # each leg's foot path
             rec.polylines.append(
                 Polyline(f"{base_path}/foot_path", p_tool, 0.25 * radius, C_PATH, K)
@@ -773,16 +824,45 @@ def _floats(text: str | None, n: int, default: float = 0.0) -> list[float]:
     return vals + [default] * (n - len(vals)) if len(vals) < n else vals[:n]
 
 
-def _urdf_visuals(robot: Robot, frames_path: str, notes: list[str]) -> list[PoseTrack]:
+def _urdf_mesh(
+    shape: Any, link: str, k_link: int, mesh_roots: MeshRoots, notes: list[str]
+) -> dict[str, Any] | None:
+    """The PoseTrack fields of a ``<mesh>`` visual, its file read only inside ``mesh_roots``
+    (none: no file access, DESIGN §5); a mesh not read is noted and left to the link capsule."""
+    name = shape.get("filename", "")
+    drawn = "the link is drawn as a capsule" if k_link > 0 else "it is not drawn"
+    try:
+        if mesh_roots and os.path.splitext(name)[1].lower() not in MESH_SUFFIXES:
+            raise ResourceRefused(
+                name, f"only {', '.join(sorted(MESH_SUFFIXES))} meshes can be recorded"
+            )
+        path, data = read_resource(name, mesh_roots, max_bytes=MAX_MESH_BYTES)
+    except ResourceRefused as exc:
+        notes.append(f"URDF mesh {name!r} of link {link!r} not read: {exc.reason}; {drawn}")
+        return None
+    scale = _floats(shape.get("scale"), 3, 1.0)
+    return {"geometry": "mesh", "mesh": str(path), "mesh_data": data, "half_size": tuple(scale)}
+
+
+def _urdf_visuals(
+    robot: Robot, frames_path: str, notes: list[str], mesh_roots: MeshRoots = ()
+) -> list[PoseTrack]:
     """The ``<visual>`` geometry of a URDF robot, each a static child of its link's frame entity:
-    boxes, cylinders (as capsules) and spheres drawn as given; meshes drawn from the file when it
-    exists on this machine (plain or ``file://`` path), else noted and left to the link capsule."""
+    boxes, cylinders (as capsules) and spheres drawn as given; a mesh is drawn only when its name
+    resolves to a file inside one of ``mesh_roots`` (:mod:`legcore.resource_paths`; default none:
+    no file is ever opened), else noted (``notes``) and left to the link capsule."""
     import xml.etree.ElementTree as ET
-    from pathlib import Path
+
+    from legcore.robots.build import reject_declarations
 
     spec = robot.spec
     text = getattr(spec, "urdf", None)
     if not text:
+        return []
+    try:
+        reject_declarations(text)
+    except ValueError as exc:
+        notes.append(f"URDF visuals not drawn: {exc}")
         return []
     model = robot.model
     index: dict[str, int] = {}
@@ -818,13 +898,10 @@ def _urdf_visuals(robot: Robot, frames_path: str, notes: list[str]) -> list[Pose
                 r = float(shape.get("radius", "0"))
                 kw = {"geometry": "capsule", "length": 0.0, "radius": r}
             elif shape.tag == "mesh":
-                name = shape.get("filename", "")
-                local = Path(name[7:] if name.startswith("file://") else name)
-                if not local.is_file():
-                    notes.append(f"URDF mesh {name!r} of link {link.get('name')!r} not found here")
+                mesh = _urdf_mesh(shape, link.get("name", "?"), k_link, mesh_roots, notes)
+                if mesh is None:
                     continue
-                scale = _floats(shape.get("scale"), 3, 1.0)
-                kw = {"geometry": "mesh", "mesh": str(local), "half_size": tuple(scale)}
+                kw = mesh
             else:
                 continue
             out.append(PoseTrack(path, None, p[None], R[None], color=C_LINK, **kw))
@@ -950,11 +1027,13 @@ def record_motion(
     animate: bool = True,
     scene: bool = True,
     path_color: tuple[int, int, int] = C_PATH,
+    mesh_roots: MeshRoots = (),
 ) -> MotionRecording:
     """The items of one motion: joint signals under ``signals_prefix``, and under
     ``world_prefix`` the path, plus (``animate``) the robot's frames and links over time and
     (``scene``) the scene items. ``robot`` None: the catalog robot ``motion.robot`` if there is
-    one, else no robot is drawn (a note says why)."""
+    one, else no robot is drawn (a note says why). ``mesh_roots``: the only directories URDF
+    mesh files are read from (default none: no file access; see :func:`record_run`)."""
     K = motion.n_samples
     rec = MotionRecording(name=name, n_source=K, max_samples=max_samples)
     parts = unique_parts(motion.joint_names)
@@ -974,7 +1053,7 @@ def record_motion(
             Polyline(f"{world_prefix}/path", tool[idx], 0.3 * radius, path_color, K)
         )
     if animate and robot is not None:
-        _robot_items(robot, motion, idx, world_prefix, rec)
+        _robot_items(robot, motion, idx, world_prefix, rec, mesh_roots)
     if scene:
         _scene_items(motion, idx, world_prefix, radius, rec)
     return rec
@@ -1096,10 +1175,27 @@ DEFAULT_MAX_BYTES = 16_000_000
 MIN_SAMPLES = 200
 
 
+def _series_bytes(series: Sequence[Series]) -> tuple[int, int]:
+    """(entities, per-sample bytes) of scalar series: a group is one entity whose rows share
+    their row id and index (8 bytes per joint value)."""
+    groups: dict[str, tuple[int, int]] = {}
+    entities = var = 0
+    for s in series:
+        if s.group is None:
+            entities += 1
+            var += _B_SCALAR_ROW * s.n_samples
+        else:
+            rows, n = groups.get(s.group, (s.n_samples, 0))
+            groups[s.group] = (rows, n + 1)
+    entities += len(groups)
+    var += sum(rows * (_B_ROW + 8 * n) for rows, n in groups.values())
+    return entities, var
+
+
 def _motion_bytes(m: MotionRecording) -> tuple[int, int]:
     """(fixed, per-sample) estimated bytes of one motion's items."""
-    fixed = _B_ENTITY * len(m.entity_paths())
-    var = sum(_B_SCALAR_ROW * s.n_samples for s in m.series)
+    n_series, var = _series_bytes(m.series)
+    fixed = _B_ENTITY * (len(m.entity_paths()) - len(m.series) + n_series)
     var += sum(0 if p.t is None else _B_POSE_ROW * p.n_samples for p in m.poses)
     var += sum(_B_ROW * p.t.shape[0] + _B_POINT * p.positions[..., 0].size for p in m.points)
     fixed += sum(_B_POINT * p.points.shape[0] for p in m.polylines)
@@ -1108,6 +1204,7 @@ def _motion_bytes(m: MotionRecording) -> tuple[int, int]:
     )
     fixed += sum(_B_POINT * p.points.shape[0] for p in m.point_sets)
     fixed += sum(2 * _B_POINT * p.centers.shape[0] for p in m.boxes)
+    fixed += sum(len(p.mesh_data) for p in m.poses)
     return fixed, var
 
 
@@ -1135,6 +1232,7 @@ def record_run(
     max_samples: int = DEFAULT_MAX_SAMPLES,
     max_front_points: int | None = None,
     max_bytes: int | None = DEFAULT_MAX_BYTES,
+    mesh_roots: MeshRoots = (),
 ) -> RunRecording:
     """Everything to log for a finished job.
 
@@ -1148,6 +1246,11 @@ def record_run(
     budget), the caps are lowered in proportion to the excess — the baselines' first, then the
     best motion's (never below ``MIN_SAMPLES``), then the front's (never below
     ``MIN_SAMPLES // 4`` points) — until it fits; ``properties`` and ``notes`` say so.
+
+    ``mesh_roots``: the only directories a URDF ``<mesh filename=…>`` may be read from
+    (``package://<pkg>/<rel>`` or a relative name, confined by :mod:`legcore.resource_paths`).
+    The default, none, opens no file at all — what every robot submitted over the API gets
+    (DESIGN §5); a mesh not read becomes a note and its link is drawn as a capsule.
     """
     notes: list[str] = []
     if robot is None:
@@ -1159,7 +1262,7 @@ def record_run(
         "front": max_front_points or max_samples,
     }
     caps = dict(initial)
-    best = _record_best(result, robot, caps["best"])
+    best = _record_best(result, robot, caps["best"], mesh_roots)
     baselines = _record_baselines(result, robot, caps["baselines"])
     front, best_point = _record_fronts(result, fronts, m, caps["front"], max_samples, notes)
 
@@ -1194,7 +1297,7 @@ def record_run(
         if key == "baselines":
             baselines = _record_baselines(result, robot, new_cap)
         elif key == "best":
-            best = _record_best(result, robot, new_cap)
+            best = _record_best(result, robot, new_cap, mesh_roots)
         else:
             front, best_point = _record_fronts(result, fronts, m, new_cap, max_samples, [])
         rec = assemble()
@@ -1220,12 +1323,12 @@ def record_run(
 
 
 def _record_best(
-    result: RunResult, robot: Robot | LeggedRobot | None, cap: int
+    result: RunResult, robot: Robot | LeggedRobot | None, cap: int, mesh_roots: MeshRoots = ()
 ) -> MotionRecording | None:
     best_sol: Solution | None = getattr(result, "best", None)
     if best_sol is None or best_sol.motion is None:
         return None
-    return record_motion(best_sol.motion, robot, max_samples=cap)
+    return record_motion(best_sol.motion, robot, max_samples=cap, mesh_roots=mesh_roots)
 
 
 def _record_baselines(

@@ -12,13 +12,15 @@ from typing import Any
 
 import numpy as np
 
+from legcore.earned import earned_summary
 from legcore.jobspec import JobSpec, parse_job_spec
 from legcore.optimizers import Progress, Result, Run, get_algorithm, termination_from_budget
 from legcore.optimizers.base import Algorithm
 from legcore.optimizers.termination import Termination
+from legcore.problems.base import constraint_violation
 from legcore.problems.registry import get_study
 from legcore.problems.study import Solution, Study, StudyProblem
-from legcore.robots import LeggedRobot, Robot, build_robot, catalog
+from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog
 
 __all__ = [
     "JobSize",
@@ -41,13 +43,10 @@ def resolve_robot(spec: JobSpec, study: Study) -> Robot | LeggedRobot:
         except KeyError as exc:
             raise ValueError(f"robot: {exc.args[0]}") from None
     else:
-        robot = build_robot(robot_ref)
-    kind = "legged" if isinstance(robot, LeggedRobot) else "serial"
-    if kind not in study.robot_kinds:
-        raise ValueError(
-            f"robot: the {study.kind} study needs a {' or '.join(study.robot_kinds)} robot, "
-            f"{getattr(robot, 'name', robot_ref)!r} is {kind}"
-        )
+        robot = build_any_robot(robot_ref)
+    reason = study.refusal(robot)
+    if reason is not None:
+        raise ValueError(f"robot: {reason}")
     return robot
 
 
@@ -103,6 +102,8 @@ class JobSize:
     population: int
     generations: int
     samples: int
+    #: predicted peak resident memory of a process running the job, bytes (legcore.memory)
+    peak_bytes: int = 0
 
     @property
     def work(self) -> int:
@@ -110,7 +111,8 @@ class JobSize:
 
 
 def job_size(prepared: Prepared) -> JobSize:
-    """Estimate the size of a prepared job (for the service's per-job limits)."""
+    """Estimate the size of a prepared job (for the service's per-job limits), with its
+    predicted peak memory (:func:`legcore.memory.predicted_peak_bytes`)."""
     params = prepared.algorithm.params
     population = next(
         (int(params[k]) for k in ("pop_size", "n_samples", "n_subproblems") if k in params), 1
@@ -119,7 +121,10 @@ def job_size(prepared: Prepared) -> JobSize:
     if generations is None:
         evals = prepared.spec.budget.evaluations
         generations = -(-evals // population) if evals else prepared.study.default_generations
-    return JobSize(population, int(generations), max(1, int(prepared.problem.n_samples)))
+    from legcore.memory import predicted_peak_bytes
+
+    return JobSize(population, int(generations), max(1, int(prepared.problem.n_samples)),
+                   predicted_peak_bytes(prepared.problem, population))
 
 
 @dataclass(frozen=True, eq=False)
@@ -135,9 +140,11 @@ class RunResult:
     extras: dict[str, Any]
     optimizer: dict[str, Any]
     objective_names: tuple[str, ...]
+    start: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """``result.json``: spec, status, best, pareto, baselines, history, extras, optimizer."""
+        """``result.json``: spec, status, best, pareto, baselines, history, extras, optimizer,
+        start (what the optimiser earned: `legcore.earned`)."""
         return _jsonable(
             {
                 "spec": self.spec.model_dump(mode="json"),
@@ -149,13 +156,20 @@ class RunResult:
                 "history": self.history,
                 "extras": self.extras,
                 "optimizer": self.optimizer,
+                "start": self.start,
             }
         )
 
 
 def finalize(prepared: Prepared, result: Result) -> RunResult:
-    """Decode the optimum, the front and the baselines of a finished `Run`."""
+    """Decode the optimum, the front and the baselines of a finished `Run` (with
+    ``optimizer.refine``, the optimum is polished first: ``refine.refine_result``)."""
     problem = prepared.problem
+    refined = None
+    if prepared.spec.optimizer is not None and prepared.spec.optimizer.refine:
+        from legcore.optimizers.refine import refine_result
+
+        result, refined = refine_result(problem, result, prepared.spec.optimizer.refine_max_iter)
     best = problem.solution(np.asarray(result.x))
     pareto = [
         {"x": [float(v) for v in x], "objectives": [float(v) for v in f]}
@@ -177,8 +191,28 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
             "elapsed_s": result.elapsed,
             "reason": result.reason,
             "feasible": result.feasible,
+            **({"refine": refined} if refined is not None else {}),
         },
         objective_names=problem.objective_names,
+        start=start_summary(problem, result),
+    )
+
+
+def start_summary(problem: StudyProblem, result: Result) -> dict[str, Any]:
+    """Where the search started (initial population's best, the encoding's free solution) and
+    what the optimiser earned over each: `legcore.earned.earned_summary`."""
+    initial = None
+    if result.initial_f is not None and result.initial_cv is not None:
+        initial = (np.asarray(result.initial_f), float(result.initial_cv))
+    free = None
+    got = problem.free_start()
+    if got is not None:
+        what, x_free = got
+        F, G = problem.evaluate(np.asarray(x_free, dtype=float)[None, :])
+        free = (what, F[0], float(constraint_violation(G)[0]))
+    return earned_summary(
+        tuple(problem.objective_names) or tuple(f"f{j + 1}" for j in range(problem.n_obj)),
+        np.asarray(result.F), float(result.cv), initial, free,
     )
 
 

@@ -1,25 +1,41 @@
 """A small HTTP client of the LegOpt API (used by the CLI, the demo and the integration tests).
 
 c = Client.from_env()             # LEGOPT_API_URL, LEGOPT_API_KEY or ./legopt-data/api-key
-job = c.submit(spec)              # {"id": ..., "status": "queued", ...}
+job = c.submit(spec)              # {"id": ..., "status": "queued", ...}; safe to retry
 job = c.wait(job["id"])           # polls until succeeded | failed | cancelled
 c.result(job["id"]); c.pareto(job["id"]); c.recording(job["id"])
+c.ids_with_prefix("jobs", "2253")  # the full ids of your jobs starting with a prefix
 """
 
 from __future__ import annotations
 
 import os
+import re
 import time
+import uuid
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 import httpx
 
-__all__ = ["ApiError", "Client", "TERMINAL"]
+__all__ = ["ApiError", "Client", "TERMINAL", "is_full_id"]
 
 TERMINAL = frozenset({"succeeded", "failed", "cancelled"})
 DEFAULT_URL = "http://127.0.0.1:8000"
+#: Attempts of a creating POST when the connection fails or the server answers 502/503/504
+#: (each attempt sends the same Idempotency-Key, so the resource is created once).
+CREATE_ATTEMPTS = 5
+_RETRY_STATUS = frozenset({502, 503, 504})
+_FULL_ID = re.compile(r"[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}", re.I)
+#: Page size when listing ids (the API's largest page).
+_PAGE = 1000
+
+
+def is_full_id(text: str) -> bool:
+    """True for a whole job/sweep id (a UUID), False for a prefix."""
+    return _FULL_ID.fullmatch(text) is not None
 
 
 class ApiError(Exception):
@@ -92,12 +108,32 @@ class Client:
     def post(self, path: str, body: Any = None) -> Any:
         return self._req("POST", path, json=body).json()
 
+    def create(self, path: str, body: Any, *, idempotency_key: str | None = None) -> Any:
+        """POST that creates a resource, retried when the request may or may not have reached
+        the server (connection errors, 502/503/504): every attempt carries the same
+        ``Idempotency-Key``, so the server creates it once and a retry returns it."""
+        headers = {"Idempotency-Key": idempotency_key or uuid.uuid4().hex}
+        delay = 0.5
+        for attempt in range(1, CREATE_ATTEMPTS + 1):
+            try:
+                return self._req("POST", path, json=body, headers=headers).json()
+            except httpx.TransportError:
+                if attempt == CREATE_ATTEMPTS:
+                    raise
+            except ApiError as exc:
+                if exc.status not in _RETRY_STATUS or attempt == CREATE_ATTEMPTS:
+                    raise
+            time.sleep(delay)
+            delay = min(delay * 2, 5.0)
+        raise AssertionError("unreachable")
+
     # ------------------------------------------------------------------ endpoints
     def health(self) -> dict[str, Any]:
         return dict(self.get("/health"))
 
-    def submit(self, spec: dict[str, Any]) -> dict[str, Any]:
-        return dict(self.post("/jobs", spec))
+    def submit(self, spec: dict[str, Any], *, idempotency_key: str | None = None) -> dict[str, Any]:
+        """Submit a job; retried safely on connection errors (see :meth:`create`)."""
+        return dict(self.create("/jobs", spec, idempotency_key=idempotency_key))
 
     def job(self, job_id: str) -> dict[str, Any]:
         return dict(self.get(f"/jobs/{job_id}"))
@@ -117,19 +153,68 @@ class Client:
     def recording(self, job_id: str) -> bytes:
         return self._req("GET", f"/jobs/{job_id}/recording").content
 
+    def point_recording(self, job_id: str, k: int, *, wait_s: float = 120.0) -> bytes:
+        """The recording of point ``k`` of a job's Pareto front (made on demand by the API;
+        a 503 while another one is being made is retried until ``wait_s`` seconds)."""
+        deadline = time.monotonic() + wait_s
+        while True:
+            try:
+                return self._req("GET", f"/jobs/{job_id}/pareto/{k}/recording").content
+            except ApiError as exc:
+                if exc.status != 503 or time.monotonic() > deadline:
+                    raise
+                time.sleep(2.0)
+
     def cancel(self, job_id: str) -> dict[str, Any]:
         return dict(self.post(f"/jobs/{job_id}/cancel"))
 
-    def sweep(self, doc: dict[str, Any]) -> dict[str, Any]:
-        return dict(self.post("/sweeps", doc))
+    def sweep(self, doc: dict[str, Any], *, idempotency_key: str | None = None) -> dict[str, Any]:
+        """Create a sweep; retried safely on connection errors (see :meth:`create`)."""
+        return dict(self.create("/sweeps", doc, idempotency_key=idempotency_key))
 
     def sweep_recording(self, sweep_id: str, jobs: list[str] | None = None) -> bytes:
         """One .rrd merging the chosen jobs of a sweep (default: all with a recording)."""
         params = {"jobs": jobs} if jobs else None
         return self._req("GET", f"/sweeps/{sweep_id}/recording", params=params).content
 
-    def get_sweep(self, sweep_id: str) -> dict[str, Any]:
-        return dict(self.get(f"/sweeps/{sweep_id}"))
+    def get_sweep(self, sweep_id: str, **params: Any) -> dict[str, Any]:
+        return dict(self.get(f"/sweeps/{sweep_id}", **params))
+
+    def sweeps(self, **params: Any) -> dict[str, Any]:
+        return dict(self.get("/sweeps", **params))
+
+    def ids_with_prefix(self, collection: str, prefix: str) -> list[str]:
+        """The ids of your ``collection`` ("jobs" or "sweeps") that start with ``prefix``
+        (case-insensitive), read page by page from the listing."""
+        prefix = prefix.lower()
+        out: list[str] = []
+        offset = 0
+        while True:
+            page = self.get(f"/{collection}", limit=_PAGE, offset=offset)
+            items = page.get("items") or []
+            out.extend(str(i["id"]) for i in items if str(i["id"]).lower().startswith(prefix))
+            offset += len(items)
+            if not items or offset >= int(page.get("total", 0)):
+                return out
+
+    def add_robot(
+        self, name: str, spec: dict[str, Any], *, idempotency_key: str | None = None
+    ) -> dict[str, Any]:
+        """Store an inline robot ``spec`` under ``name`` (validated and built by the server);
+        retried safely on connection errors (see :meth:`create`)."""
+        body = {"name": name, "spec": spec}
+        return dict(self.create("/robots", body, idempotency_key=idempotency_key))
+
+    def robots(
+        self, *, include_catalog: bool = False, limit: int = 100, offset: int = 0
+    ) -> dict[str, Any]:
+        """One page of your robots (``{"items", "total", "limit", "offset"}``)."""
+        params = {"include_catalog": include_catalog, "limit": limit, "offset": offset}
+        return dict(self.get("/robots", **params))
+
+    def robot(self, robot_id: str) -> dict[str, Any]:
+        """One robot (yours by id, or a catalog name): spec, summary and capabilities."""
+        return dict(self.get(f"/robots/{quote(robot_id, safe='')}"))
 
     def wait(
         self,

@@ -63,6 +63,9 @@ class Result:
             (MOEA/D: its external archive; NSGA-II: the first front of the population; one
             objective: the best solution if feasible).
         history: one `GenerationRecord` per generation.
+        initial_x, initial_f, initial_cv: the best of the first generation (the initial
+            population) — where the optimiser started, so that a result can say what it earned
+            (``None`` for a run resumed from a checkpoint that predates them).
         n_gen, n_evals, elapsed: generations, evaluations and wall time (s) spent.
         reason: why the run stopped.
         algorithm, params, seed: what produced it.
@@ -81,6 +84,9 @@ class Result:
     algorithm: str
     params: dict[str, Any]
     seed: int | None
+    initial_x: np.ndarray | None = None
+    initial_f: np.ndarray | None = None
+    initial_cv: float | None = None
 
     @property
     def feasible(self) -> bool:
@@ -125,6 +131,7 @@ class Run:
         self._elapsed = 0.0
         self._reason: str | None = None
         self._progress: Progress | None = None
+        self._initial: tuple[np.ndarray, np.ndarray, float] | None = None
         algorithm.setup(problem, self.seed)
         if state is not None:
             self._load(from_jsonable(state))
@@ -160,6 +167,8 @@ class Run:
         F, G = self.problem.evaluate(X)
         algo.tell(X, F, G)
         progress = self._make_progress(self._elapsed + (time.perf_counter() - t0))
+        if self._initial is None and not self._history:
+            self._initial = (progress.best_x.copy(), progress.best_f.copy(), progress.best_cv)
         self._elapsed = progress.elapsed
         self._history.append(GenerationRecord.from_progress(progress))
         self._progress = progress
@@ -191,6 +200,9 @@ class Run:
             algorithm=self.algorithm.kind,
             params=self.algorithm.params,
             seed=self.seed,
+            initial_x=None if self._initial is None else _frozen(self._initial[0]),
+            initial_f=None if self._initial is None else _frozen(self._initial[1]),
+            initial_cv=None if self._initial is None else float(self._initial[2]),
         )
 
     # ------------------------------------------------------------------ checkpoint
@@ -204,6 +216,9 @@ class Run:
             "stop_reason": self._reason,
             "history": [r.to_dict() for r in self._history],
             "algorithm": self.algorithm.state_dict(),
+            "initial": None if self._initial is None else {
+                "x": self._initial[0], "f": self._initial[1], "cv": self._initial[2]
+            },
         }
 
     def _load(self, state: dict[str, Any]) -> None:
@@ -221,6 +236,11 @@ class Run:
         self._elapsed = float(state["elapsed"])
         self._reason = state.get("stop_reason")
         self._progress = None
+        init = state.get("initial")
+        self._initial = None if not init else (
+            np.asarray(init["x"], dtype=float), np.asarray(init["f"], dtype=float),
+            float(init["cv"]),
+        )
 
     def _make_progress(self, elapsed: float) -> Progress:
         algo = self.algorithm

@@ -81,6 +81,9 @@ class Problem(ABC):
         n_var, n_obj, n_constr, xl, xu, resolution, name: as given (arrays are read-only).
     """
 
+    #: Memory budget (bytes) of one ``evaluate`` call; ``None``: :mod:`legcore.memory`'s default.
+    eval_budget_bytes: int | None = None
+
     def __init__(
         self,
         n_var: int,
@@ -161,6 +164,10 @@ class Problem(ABC):
         Args:
             X: ``(B, n_var)`` decision vectors (a single ``(n_var,)`` vector is accepted as B = 1).
 
+        A batch larger than :meth:`chunk_rows` is evaluated in consecutive chunks of rows (rows
+        are independent, so the result is the same) so that its memory stays within the
+        evaluation budget (see :mod:`legcore.memory`).
+
         Returns:
             ``F`` ``(B, n_obj)`` and ``G`` ``(B, n_constr)``, float arrays.
 
@@ -175,8 +182,25 @@ class Problem(ABC):
             raise ValueError(f"X: expected shape (B, {self.n_var}), got {X.shape}")
         if not np.all(np.isfinite(X)):
             raise ValueError("X: contains NaN or infinite entries")
-        F, G = self._evaluate(X)
-        return self.check_output(X.shape[0], F, G)
+        n = X.shape[0]
+        rows = self.chunk_rows(X)
+        if n <= rows:
+            F, G = self._evaluate(X)
+            return self.check_output(n, F, G)
+        parts = [self.check_output(min(rows, n - i), *self._evaluate(X[i : i + rows]))
+                 for i in range(0, n, rows)]
+        return (np.concatenate([p[0] for p in parts], axis=0),
+                np.concatenate([p[1] for p in parts], axis=0))
+
+    def chunk_rows(self, X: np.ndarray | None = None) -> int:
+        """At most this many rows are passed to ``_evaluate`` at once (``evaluate`` splits a
+        larger batch ``X`` and concatenates the results): the evaluation budget over the bytes
+        one row costs, :func:`legcore.memory.chunk_rows`. Set the ``eval_budget_bytes``
+        attribute to change the budget of one problem (bytes; ``None``:
+        ``LEGOPT_EVAL_MEMORY_MB`` or 256 MiB)."""
+        from legcore.memory import chunk_rows
+
+        return chunk_rows(self, X=X)
 
     def check_output(self, n: int, F: Any, G: Any) -> tuple[np.ndarray, np.ndarray]:
         """Coerce and validate ``(F, G)`` for a batch of ``n`` rows (used by ``evaluate``)."""

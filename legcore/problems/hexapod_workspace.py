@@ -3,6 +3,12 @@
 Source: seed 002 (Domínguez, Sepúlveda, Montiel, Castillo), §3.1 eqs (11)–(14), §4, Table 2,
 Figs 6–9; robot ``citedi_hexapod`` (see its catalog docstring and docs/legged.md).
 
+Any hexapod with 3-joint legs, three on each side of the walking axis: the catalog's, one from
+URDF, or a parametric one (``hexapod``: leg lengths and hip layout,
+:mod:`legcore.problems.hexapod_workspace_robot`). Legs, tripods and the study frame (walking
+along +y) come from :mod:`legcore.problems.hexapod_workspace_legs`; seed 002's legs use the
+closed forms of its eqs (5)–(10), other legs the numerical FK/IK. Every default is seed 002's.
+
 Problem (eq 11). The tripod 1-3-5 stands on the ground with θ1 = 0, θ2 = −π/8, θ3 = −π/4 on
 every stance leg (stance ``t``). The decision is the new coxa angles ``x = (θ1,1, θ1,3, θ1,5)``
 (``[−π/6, π/6]`` each; θ2, θ3 stay fixed) which put the feet at new body-frame positions
@@ -41,17 +47,15 @@ solutions a–d (with the printed numbers beside ours) and the start stance.
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, model_validator
 
 from legcore.gaits import stability_margin, support_triangle, tripod_feet, tripod_stability
 from legcore.metrics import hypervolume
 from legcore.problems.hexapod_workspace_geometry import (
     OTHER_STANCE,
-    STANCES,
     Tripod,
     body_pose_ik,
     fit_body_motion,
@@ -61,18 +65,19 @@ from legcore.problems.hexapod_workspace_geometry import (
     pose_workspace,
     tripod_from_robot,
 )
-from legcore.problems.study import Motion, Solution, Study, StudyParams, StudyProblem
+from legcore.problems.hexapod_workspace_legs import STANCE_ROLES, leg_roles
+from legcore.problems.hexapod_workspace_params import HV_REF, Params
+from legcore.problems.hexapod_workspace_robot import parametric_hexapod
+from legcore.problems.study import Motion, Solution, Study, StudyProblem
+from legcore.robots.capabilities import Needs
 from legcore.trajectories.profiles import QuinticProfile
 
 __all__ = ["HV_REF", "PAPER_TABLE2", "HexapodWorkspaceProblem", "Params", "STUDY", "build"]
 
 FloatArray = NDArray[np.float64]
 
-#: Hypervolume reference point (f1 rad, f2 rad, f3 m): 1° of β1, 1° of β5, 1 mm of perimeter —
-#: the errors up to which a point is counted (fixed for the study so that runs compare).
-HV_REF: tuple[float, float, float] = (math.radians(1.0), math.radians(1.0), 1.0e-3)
-
-#: Seed 002 Table 2 as printed: θ1 of legs 1, 3, 5 (rad), foot x, y (cm) and f1, f2, f3.
+#: Seed 002 Table 2 as printed: θ1 of legs 1, 3, 5 (rad), foot x, y (cm) and f1, f2, f3 — the
+#: ``paper_*`` baselines (``paper_baselines``).
 PAPER_TABLE2: dict[str, dict[str, Any]] = {
     "a": {"theta1": (0.3883, 0.5103, 0.3975), "x_cm": (9.544, 9.198, -9.52),
           "y_cm": (7.472, -1.81, -2.528), "f": (0.0001, 0.0009, 0.0764)},
@@ -84,85 +89,6 @@ PAPER_TABLE2: dict[str, dict[str, Any]] = {
           "y_cm": (2.528, -8.17, 2.528), "f": (0.0001, 0.0009, 0.0759)},
 }
 
-_MAX_GRID = 2_000_000
-
-
-class Params(StudyParams):
-    """Parameters of the seed 002 study (defaults = the paper's settings; SI units).
-
-    - ``theta1_min``/``theta1_max``: bounds of each decision θ1 (rad), paper ±π/6.
-    - ``theta2``, ``theta3``: fixed femur/tibia angles of the stance legs (rad), paper −π/8, −π/4.
-    - ``theta1_start``: θ1 of (front, back, middle) at stance t (rad), paper (0, 0, 0).
-    - ``stance``: "135" (legs L1, L3, L5 — the paper's experiment) or "246" (L4, L6, L2).
-    - ``triangle_formula``: "interior" (exact angles) or "paper" (eqs 12–13 as printed).
-    - ``stability``: "classify" (post hoc, as the paper) or "constraint" (S_f, S_b > 0 as G).
-    - ``pose_x_extent``, ``pose_y_extent`` (m), ``pose_xy_step`` (m), ``pose_yaw_extent``,
-      ``pose_yaw_step`` (rad): grid of body displacements for the exact pose workspace
-      (``[−extent, extent]`` each); ``knee``: IK branch there and in the motion ("up" = the
-      paper's posture θ3 ≤ 0, "down", or "either").
-    - ``duration`` (s) and ``motion_samples``: the decoded body motion from t to t+1.
-    - ``hv_ref_point``: (f1 rad, f2 rad, f3 m) reference point of the reported hypervolume.
-    - ``straight_step``: Δθ1 (rad) of the straight-walk baseline of §3 (θ1 of the front and
-      back legs −Δθ1, of the middle leg +Δθ1); the paper gives no value, default 5°.
-    """
-
-    kind: Literal["hexapod_workspace"] = "hexapod_workspace"
-    theta1_min: float = Field(default=-math.pi / 6, ge=-math.pi, le=math.pi)
-    theta1_max: float = Field(default=math.pi / 6, ge=-math.pi, le=math.pi)
-    theta2: float = Field(default=-math.pi / 8, ge=-math.pi, le=math.pi)
-    theta3: float = Field(default=-math.pi / 4, ge=-math.pi, le=math.pi)
-    theta1_start: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    stance: Literal["135", "246"] = "135"
-    triangle_formula: Literal["interior", "paper"] = "interior"
-    stability: Literal["classify", "constraint"] = "classify"
-    pose_x_extent: float = Field(default=0.04, gt=0.0, le=1.0)
-    pose_y_extent: float = Field(default=0.04, gt=0.0, le=1.0)
-    pose_xy_step: float = Field(default=0.001, gt=0.0, le=1.0)
-    pose_yaw_extent: float = Field(default=math.pi / 6, ge=0.0, le=math.pi)
-    pose_yaw_step: float = Field(default=math.pi / 36, gt=0.0, le=math.pi)
-    knee: Literal["up", "down", "either"] = "up"
-    duration: float = Field(default=1.0, gt=0.0, le=3600.0)
-    motion_samples: int = Field(default=51, ge=2, le=5000)
-    hv_ref_point: tuple[float, float, float] = HV_REF
-    straight_step: float = Field(default=math.radians(5.0), gt=0.0, le=math.pi / 2)
-
-    @model_validator(mode="after")
-    def _check(self) -> Params:
-        if not self.theta1_min < self.theta1_max:
-            raise ValueError(f"theta1_min: must be below theta1_max "
-                             f"({self.theta1_min} >= {self.theta1_max})")
-        for name, v in (("theta1_start", self.theta1_start), ("hv_ref_point", self.hv_ref_point)):
-            if not all(math.isfinite(t) for t in v):
-                raise ValueError(f"{name}: values must be finite")
-        if not all(t > 0.0 for t in self.hv_ref_point):
-            raise ValueError("hv_ref_point: every coordinate must be > 0")
-        if any(abs(t) > math.pi for t in self.theta1_start):
-            raise ValueError("theta1_start: angles must lie in [-pi, pi] rad")
-        n = self.pose_grid_shape
-        if n[0] * n[1] * n[2] > _MAX_GRID:
-            raise ValueError(f"pose_xy_step: the pose grid would have {n[0] * n[1] * n[2]} poses "
-                             f"(max {_MAX_GRID}); use a coarser step or a smaller extent")
-        return self
-
-    @property
-    def pose_grid_shape(self) -> tuple[int, int, int]:
-        """(nyaw, ny, nx) of the pose-workspace grid."""
-        def count(extent: float, step: float) -> int:
-            return 2 * int(math.floor(extent / step + 1e-9)) + 1
-        return (count(self.pose_yaw_extent, self.pose_yaw_step),
-                count(self.pose_y_extent, self.pose_xy_step),
-                count(self.pose_x_extent, self.pose_xy_step))
-
-    def pose_grid(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Grid axes (x, y, yaw), symmetric about 0 (m, m, rad)."""
-        nyaw, ny, nx = self.pose_grid_shape
-        step = self.pose_xy_step
-        x = (np.arange(nx, dtype=float) - nx // 2) * step
-        y = (np.arange(ny, dtype=float) - ny // 2) * step
-        yaw = (np.arange(nyaw, dtype=float) - nyaw // 2) * self.pose_yaw_step
-        return x, y, yaw
-
-
 class HexapodWorkspaceProblem(StudyProblem):
     """Seed 002's eq (11) for one tripod: decision θ1 of (front, back, middle) legs, three
     objectives (rad, rad, m), optional stability constraints. See the module docstring."""
@@ -172,10 +98,16 @@ class HexapodWorkspaceProblem(StudyProblem):
 
     def __init__(self, robot: Any, params: Params) -> None:
         self.params = params
+        if params.hexapod is not None:
+            robot = parametric_hexapod(params.hexapod)
         self.robot = robot
         self.tripod: Tripod = tripod_from_robot(robot, params.stance)
+        roles = leg_roles(robot)
+        self.stance_legs = {k: tuple(roles[r] for r in v) for k, v in STANCE_ROLES.items()}
         self.theta_start = np.asarray(params.theta1_start, dtype=float)
         self.theta2, self.theta3 = float(params.theta2), float(params.theta3)
+        self.q_stance = np.column_stack((self.theta_start, np.full(3, self.theta2),
+                                         np.full(3, self.theta3)))  # (3 legs, 3 joints)
         self._check_limits(params)
         self.feet_start = self.feet(self.theta_start[None])[0]          # (3, 3) world
         b1, b5, p = self._triangle(self.feet_start[None])
@@ -201,15 +133,20 @@ class HexapodWorkspaceProblem(StudyProblem):
                 if not lo[j] - 1e-9 <= v <= hi[j] + 1e-9:
                     raise ValueError(f"problem.{name}: {v:.4f} rad is outside the joint limits "
                                      f"[{lo[j]:.4f}, {hi[j]:.4f}] of leg {leg}")
-        z = float(self.feet(self.theta_start[None])[0, 0, 2])
-        if not z < 0.0:
+        z = self.feet(self.theta_start[None])[0, :, 2] - t.hips[:, 2, 3]
+        if not np.all(z < 0.0):
             raise ValueError(f"problem.theta2: the stance feet must be below the hips "
-                             f"(foot z = {z:.4f} m with theta2, theta3 given)")
+                             f"(foot z = {z.max():.4f} m from its hip with theta2, theta3 given)")
 
     # ------------------------------------------------------------------ vectorised pieces
     def feet(self, theta1: FloatArray) -> FloatArray:
-        """Body-frame feet (B, 3, 3) of coxa angles (B, 3) with θ2, θ3 fixed (eqs 5–7), m."""
-        return tripod_feet(theta1, self.tripod.hips, self.tripod.L, self.theta2, self.theta3)
+        """Study-frame feet (B, 3, 3) of coxa angles (B, 3) with θ2, θ3 fixed (eqs 5–7 for
+        seed 002's legs), m."""
+        if self.tripod.closed_form:
+            return tripod_feet(theta1, self.tripod.hips, self.tripod.L, self.theta2, self.theta3)
+        th1 = np.asarray(theta1, dtype=float)
+        q = np.stack(np.broadcast_arrays(th1, self.theta2, self.theta3), -1)
+        return self.tripod.feet(q)
 
     def _triangle(self, feet: FloatArray) -> tuple[Any, Any, Any]:
         return support_triangle(feet[..., 0, :], feet[..., 1, :], feet[..., 2, :],
@@ -249,7 +186,7 @@ class HexapodWorkspaceProblem(StudyProblem):
         stance feet fixed and θ1, θ2, θ3 free (``knee`` branch, joint limits)."""
         pose = np.atleast_2d(pose)
         return body_pose_ik(self.tripod, self.feet_start, pose[:, 0], pose[:, 1], pose[:, 2],
-                            knee=self.params.knee)
+                            knee=self.params.knee, q_ref=self.q_stance)
 
     # ------------------------------------------------------------------ decoding
     def solution(self, x: FloatArray) -> Solution:
@@ -290,6 +227,9 @@ class HexapodWorkspaceProblem(StudyProblem):
             **{f"theta1_{leg}": float(v) for leg, v in zip(legs, x, strict=True)},
             "beta1": float(b1[0]), "beta5": float(b5[0]), "perimeter": float(p[0]),
             "S_f": float(S[0]), "S_b": float(S[1]), "stable": float(stable),
+            # an unbounded distance (diagonal ~parallel to x) is no number: null + this flag
+            "S_f_unbounded": float(not math.isfinite(S[0])),
+            "S_b_unbounded": float(not math.isfinite(S[1])),
             "stability_margin": float(stability_margin(feet)),
             "body_dx": float(pose[0]), "body_dy": float(pose[1]), "body_dyaw": float(pose[2]),
             "foot_slip_max": float(slip.max()),
@@ -347,7 +287,7 @@ class HexapodWorkspaceProblem(StudyProblem):
         legs = self.tripod.legs
         names = tuple(f"{leg}.q{j + 1}" for leg in legs for j in range(3))
         scene: dict[str, Any] = {
-            "frame": "world = body frame at stance t (z up, walking along +y)",
+            "frame": "world = study frame at stance t (z up, walking along +y)",
             "support_polygon": self.feet_start[[0, 2, 1]],     # front, middle, back
             "feet": {leg: self.feet_start[k] for k, leg in enumerate(legs)},
             "ground_z": float(self.feet_start[0, 2]),
@@ -372,7 +312,7 @@ class HexapodWorkspaceProblem(StudyProblem):
             step = mirror_left_right(step)
         straight = np.clip(self.theta_start + step, self.xl, self.xu)
         out["straight_walk"] = self.solution(straight)
-        for key, row in PAPER_TABLE2.items():
+        for key, row in (PAPER_TABLE2 if self.params.paper_baselines else {}).items():
             theta = np.asarray(row["theta1"], dtype=float)
             if self.params.stance == "246":
                 theta = mirror_left_right(theta)
@@ -405,7 +345,8 @@ class HexapodWorkspaceProblem(StudyProblem):
     def pose_workspace(self) -> Any:
         """The exact body-pose workspace on the ``Params`` grid (see geometry module)."""
         x, y, yaw = self.params.pose_grid()
-        return pose_workspace(self.tripod, self.feet_start, x, y, yaw, knee=self.params.knee)
+        return pose_workspace(self.tripod, self.feet_start, x, y, yaw, knee=self.params.knee,
+                              q_ref=self.q_stance)
 
     def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
         p = self.params
@@ -494,7 +435,7 @@ class HexapodWorkspaceProblem(StudyProblem):
         if self.symmetry["left_right"]:
             other = OTHER_STANCE[self.params.stance]
             out["other_tripod"] = {
-                "legs": list(STANCES[other]),
+                "legs": list(self.stance_legs[other]),
                 "theta1": mirror_left_right(X).tolist(),
                 "body_pose": (rep["pose"] * np.array([-1.0, 1.0, -1.0])).tolist(),
             }
@@ -509,7 +450,8 @@ def _json_list(a: FloatArray) -> Any:
 
 
 def build(robot: Any, params: Params) -> HexapodWorkspaceProblem:
-    """The study problem for ``robot`` (a seed-002-like hexapod) and ``params``."""
+    """The study problem for ``robot`` (a hexapod with 3-joint legs, or the parametric one of
+    ``params.hexapod``) and ``params``."""
     if not isinstance(params, Params):
         params = Params.model_validate(params)
     return HexapodWorkspaceProblem(robot, params)
@@ -525,4 +467,13 @@ STUDY = Study(
     default_generations=100,
     build=build,
     robot_kinds=("legged",),
+    needs=(Needs(legged=True, n_legs=(6,), leg_joints=(3, 3), revolute=True),),
+    description=(
+        "A hexapod (six legs of 3 joints, three on each side) stands on a tripod; the decision "
+        "is the first (coxa) joint of the three stance legs, the others held. MOEA/D minimises "
+        "the errors of the support triangle's two angles and perimeter (the body can move with "
+        "the feet fixed); reports the front, its stable/unstable split, the mirrored workspace "
+        "and the exact (x, y, yaw) workspace of the body with the feet fixed. A parametric "
+        "hexapod (problem.hexapod: leg lengths, hip layout) replaces the robot."
+    ),
 )

@@ -11,34 +11,42 @@ Everything is vectorised over leading batch axes; leg order is the decision vect
 ``(front, back, middle)`` — for stance 1-3-5 of ``citedi_hexapod`` that is ``(L1, L3, L5)``, the
 ``p1, p3, p5`` of the paper's eqs (12)–(14).
 
-- :func:`tripod_from_robot` — validated leg data (hips, link lengths, joint limits) of a stance.
+- :func:`tripod_from_robot` — the stance legs (hips, chains, joint limits) of a tripod
+  (:mod:`legcore.problems.hexapod_workspace_legs`, re-exported here).
 - :func:`fit_body_motion` — the planar rigid motion that best carries the feet of ``t+1``
   (body frame) onto the fixed feet of ``t`` (2-D Kabsch): the body displacement a solution
   stands for, and the residual foot slip (zero only for a congruent triangle).
 - :func:`mirror_front_back`, :func:`mirror_left_right` — the robot's two mirror symmetries.
 - :func:`body_pose_ik`, :func:`pose_workspace` — beyond the paper: the exact set of body poses
-  reachable with the three feet fixed, by the closed-form leg IK (eqs 8–10) with θ2, θ3 free.
+  reachable with the three feet fixed, by the leg IK with θ1, θ2, θ3 free (the closed form of
+  eqs 8–10 for seed 002's legs, :func:`legcore.ik.solve` for others).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from legcore.ik.leg3 import KNEE_DOWN, KNEE_UP, leg3_fk, leg3_ik
-from legcore.robots.legged import LeggedRobot
-from legcore.robots.spec import DHRobotSpec
+from legcore.ik.leg3 import KNEE_DOWN, KNEE_UP
+from legcore.problems.hexapod_workspace_legs import (
+    OTHER_STANCE,
+    STANCES,
+    Tripod,
+    is_mirror_symmetric,
+    tripod_from_robot,
+)
 
 __all__ = [
+    "OTHER_STANCE",
     "STANCES",
     "PoseWorkspace",
     "Tripod",
     "body_pose_ik",
     "fit_body_motion",
+    "is_mirror_symmetric",
     "mirror_front_back",
     "mirror_left_right",
     "pose_workspace",
@@ -47,126 +55,6 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-
-#: The two tripods of seed 002's Fig. 3 in the decision-vector order (front, back, middle).
-STANCES: dict[str, tuple[str, str, str]] = {"135": ("L1", "L3", "L5"), "246": ("L4", "L6", "L2")}
-#: The tripod a left/right mirror (x → −x) maps each stance onto.
-OTHER_STANCE = {"135": "246", "246": "135"}
-
-
-@dataclass(frozen=True, eq=False)
-class Tripod:
-    """The three stance legs of a tripod, in the order (front, back, middle).
-
-    ``hips`` (3, 4, 4) leg base frames in the body frame (m); ``L`` (3,) link lengths L1, L2, L3
-    (m, identical legs); ``q_min``/``q_max`` (3, 3) joint limits per leg (rad).
-    """
-
-    legs: tuple[str, str, str]
-    hips: FloatArray
-    L: FloatArray
-    q_min: FloatArray
-    q_max: FloatArray
-
-    def feet(self, q: ArrayLike) -> FloatArray:
-        """Body-frame feet (..., 3, 3) of joint angles ``q`` (..., 3, 3) (leg-major), eqs 5–7."""
-        p_leg = leg3_fk(q, self.L)
-        return np.einsum("kij,...kj->...ki", self.hips[:, :3, :3], p_leg) + self.hips[:, :3, 3]
-
-    def to_leg_frames(self, p_body: ArrayLike) -> FloatArray:
-        """Feet (..., 3, 3) from the body frame to each leg's base frame."""
-        d = np.asarray(p_body, dtype=float) - self.hips[:, :3, 3]
-        return np.einsum("kji,...kj->...ki", self.hips[:, :3, :3], d)
-
-
-def _leg_chain_lengths(robot: LeggedRobot, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:
-    leg = robot.leg(name)
-    spec = leg.robot.spec
-    if not isinstance(spec, DHRobotSpec) or spec.convention != "standard":
-        raise ValueError(f"robot: leg {name} must be a standard-DH 3-DOF leg (seed 002 Table 1)")
-    j = spec.joints
-    alphas = (math.pi / 2, 0.0, 0.0)
-    if len(j) != 3 or any(x.type != "revolute" for x in j):
-        raise ValueError(f"robot: leg {name} must have 3 revolute joints (coxa, femur, tibia)")
-    for i, (x, al) in enumerate(zip(j, alphas, strict=True)):
-        if abs(x.alpha - al) > 1e-9 or abs(x.d) > 1e-12 or abs(x.offset) > 1e-12:
-            raise ValueError(
-                f"robot: leg {name} joint {i} must have d = 0, offset = 0 and alpha = "
-                f"{math.degrees(al):.0f} deg (the leg of seed 002 eqs 5-10)"
-            )
-    for mat, what in ((spec.base, "base"), (spec.tool, "tool")):
-        if mat is not None and not np.allclose(np.asarray(mat, dtype=float), np.eye(4)):
-            raise ValueError(f"robot: leg {name} must have no {what} transform (foot = DH frame 3)")
-    return np.array([x.a for x in j]), leg.robot.q_min.copy(), leg.robot.q_max.copy()
-
-
-def tripod_from_robot(robot: Any, stance: str = "135") -> Tripod:
-    """The validated tripod ``stance`` ("135" or "246") of a six-legged robot with seed 002's
-    legs (named L1…L6, each the 3-DOF chain of :mod:`legcore.ik.leg3`, identical lengths).
-
-    Raises:
-        ValueError: ``robot: …`` if the robot is not such a hexapod, ``stance: …`` if unknown.
-    """
-    if stance not in STANCES:
-        raise ValueError(f"stance: expected one of {sorted(STANCES)}, got {stance!r}")
-    if not isinstance(robot, LeggedRobot):
-        raise ValueError("robot: the hexapod_workspace study needs a legged robot")
-    names = STANCES[stance]
-    have = {leg.name for leg in robot.legs}
-    missing = [n for n in names if n not in have]
-    if missing:
-        raise ValueError(f"robot: {robot.name!r} has no leg(s) {missing}; expected legs L1..L6")
-    data = [_leg_chain_lengths(robot, n) for n in names]
-    L = data[0][0]
-    if any(not np.allclose(d[0], L) for d in data):
-        raise ValueError("robot: the three stance legs must have the same link lengths")
-    hips = np.stack([np.asarray(robot.leg(n).hip, dtype=float) for n in names])
-    if not np.allclose(hips[:, :3, 2], [0.0, 0.0, 1.0]) or not np.allclose(hips[:, 2, 3], 0.0):
-        raise ValueError("robot: the stance legs' hips must be level (yaw only) at body height 0")
-    return Tripod(
-        legs=names,
-        hips=hips,
-        L=L,
-        q_min=np.stack([d[1] for d in data]),
-        q_max=np.stack([d[2] for d in data]),
-    )
-
-
-def is_mirror_symmetric(robot: Any) -> dict[str, bool]:
-    """Which of the two mirror symmetries the robot's hips have (see the mirror functions).
-
-    ``front_back``: L1 ↔ L3 and L4 ↔ L6 under y → −y, L5 and L2 on the x axis;
-    ``left_right``: L1 ↔ L4, L3 ↔ L6, L5 ↔ L2 under x → −x. Joint limits of θ1 must be
-    symmetric (q_min = −q_max) for either.
-    """
-
-    def pose(n: str) -> tuple[float, float, float]:
-        T = np.asarray(robot.leg(n).hip, dtype=float)
-        return float(T[0, 3]), float(T[1, 3]), math.atan2(T[1, 0], T[0, 0])
-
-    def same(a: tuple[float, float, float], b: tuple[float, float, float]) -> bool:
-        dyaw = (a[2] - b[2] + math.pi) % (2 * math.pi) - math.pi
-        return abs(a[0] - b[0]) < 1e-9 and abs(a[1] - b[1]) < 1e-9 and abs(dyaw) < 1e-9
-
-    def flip_y(p: tuple[float, float, float]) -> tuple[float, float, float]:
-        return (p[0], -p[1], -p[2])
-
-    def flip_x(p: tuple[float, float, float]) -> tuple[float, float, float]:
-        return (-p[0], p[1], math.pi - p[2])
-
-    try:
-        P = {n: pose(n) for n in ("L1", "L2", "L3", "L4", "L5", "L6")}
-        lim_ok = all(
-            np.allclose(robot.leg(n).robot.q_min[0], -robot.leg(n).robot.q_max[0]) for n in P
-        )
-    except KeyError:
-        return {"front_back": False, "left_right": False}
-    fb = lim_ok and all(same(flip_y(P[a]), P[b]) for a, b in
-                        (("L1", "L3"), ("L3", "L1"), ("L4", "L6"), ("L5", "L5"), ("L2", "L2")))
-    lr = lim_ok and all(same(flip_x(P[a]), P[b]) for a, b in
-                        (("L1", "L4"), ("L3", "L6"), ("L5", "L2"), ("L2", "L5")))
-    return {"front_back": bool(fb), "left_right": bool(lr)}
-
 
 # ----------------------------------------------------------------------------------------------
 # Rigid fit of the support triangle
@@ -258,6 +146,7 @@ def body_pose_ik(
     y: ArrayLike,
     yaw: ArrayLike,
     knee: str = "up",
+    q_ref: ArrayLike | None = None,
 ) -> tuple[FloatArray, BoolArray]:
     """Joint angles of the three stance legs for body poses ``(x, y, yaw)`` with the feet fixed.
 
@@ -266,7 +155,9 @@ def body_pose_ik(
         feet_world: fixed feet (3, 3) in the world frame (m).
         x, y, yaw: body poses (broadcast together to a batch shape ``S``), m, m, rad.
         knee: ``"up"`` (θ3 ≤ 0, seed 002's posture), ``"down"`` or ``"either"`` (per leg, the
-            knee-up solution when it is within the limits, else knee-down).
+            knee-up solution when it is within the limits, else knee-down) — closed-form legs;
+            other legs take the solution nearest ``q_ref``.
+        q_ref: (3, 3) reference posture of the numerical IK (default: each leg's home).
 
     Returns:
         ``q`` (*S, 3, 3) rad (leg-major, NaN where a leg cannot reach) and ``reachable``
@@ -283,22 +174,17 @@ def body_pose_ik(
     if knee not in ("up", "down", "either"):
         raise ValueError(f"knee: expected 'up', 'down' or 'either', got {knee!r}")
     branch = KNEE_DOWN if knee == "down" else KNEE_UP
-    q, ok = _leg_ik_limits(tripod, p_leg, branch)
-    if knee == "either" and not np.all(ok):
-        q2, ok2 = _leg_ik_limits(tripod, p_leg, KNEE_DOWN)
+    if q_ref is None:
+        ref = np.stack([rb.home for rb in tripod.robots] if tripod.robots else [np.zeros(3)] * 3)
+    else:
+        ref = np.asarray(q_ref, dtype=float)
+    q, ok = tripod.ik(p_leg, branch, ref)
+    if knee == "either" and tripod.closed_form and not np.all(ok):
+        q2, ok2 = tripod.ik(p_leg, KNEE_DOWN, ref)
         use = ~ok & ok2
         q = np.where(use[..., None], q2, q)
         ok = ok | ok2
     return q, ok
-
-
-def _leg_ik_limits(tripod: Tripod, p_leg: FloatArray, branch: int) -> tuple[FloatArray, BoolArray]:
-    qs, oks = [], []
-    for k in range(3):  # three legs, each with its own limits; the batch is vectorised
-        q, ok = leg3_ik(p_leg[..., k, :], tripod.L, branch, tripod.q_min[k], tripod.q_max[k])
-        qs.append(q)
-        oks.append(ok)
-    return np.stack(qs, axis=-2), np.stack(oks, axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -379,6 +265,7 @@ def pose_workspace(
     y: ArrayLike,
     yaw: ArrayLike,
     knee: str = "up",
+    q_ref: ArrayLike | None = None,
 ) -> PoseWorkspace:
     """The exact workspace of body poses on the grid ``yaw × y × x`` (one batched IK call per
     leg over the whole grid): a pose is reachable when all three legs reach their fixed feet
@@ -388,7 +275,7 @@ def pose_workspace(
         if v.size == 0 or not np.all(np.isfinite(v)):
             raise ValueError(f"{name}: expected a non-empty finite grid axis")
     Yaw, Y, X = np.meshgrid(yaws, ys, xs, indexing="ij")
-    q, ok = body_pose_ik(tripod, feet_world, X, Y, Yaw, knee=knee)
+    q, ok = body_pose_ik(tripod, feet_world, X, Y, Yaw, knee=knee, q_ref=q_ref)
     reach: BoolArray = np.asarray(ok.all(axis=-1), dtype=bool)
     q = np.where(reach[..., None, None], q, np.nan)
     return PoseWorkspace(xs, ys, yaws, reach, q, np.asarray(feet_world, dtype=float).copy(), knee)

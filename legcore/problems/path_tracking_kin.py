@@ -1,16 +1,24 @@
-"""Path geometry by arc length, and joint rates of the 5-DOF arm with the tool pointing down.
+"""Path geometry by arc length, joint motion through a time law, and exact arm5 joint rates.
 
 :class:`ArcLengthPath` evaluates a composite planar path (lines and arcs of
 :mod:`legcore.trajectories.paths`, placed in 3D by a ``Plane``) at arc lengths σ (m) of any
 shape: position and its first three σ-derivatives, so that a time law σ(t) gives the tool
 trajectory by the chain rule (``trajectories.sampling.compose_time_law``).
 
+:func:`compose_ppoly` is the study's hot path: the joints' piecewise polynomial q(σ) composed with
+a whole population's time laws σ(t) → q, q̇, q̈, q⃛ in one numba pass (one interval search and
+one Horner pass with derivatives per sample instead of ``PPoly.__call__`` for 4 derivatives and
+:func:`~legcore.trajectories.sampling.compose_time_law`; equal to them to ~1e-15 relative);
+:func:`peak_abs` is ``max_k |a|`` over the time axis in one pass.
+
 :func:`arm5_down_rates` differentiates seed 004's closed-form IK (``legcore.ik.arm5``) exactly:
 given the joint angles on the path and the tool's velocity, acceleration and jerk, it returns
-q̇, q̈, q⃛. With the tool pointing straight down the wrist centre w is the tool point raised by
-d5, so ẇ = ṗ (the tool only turns about the vertical). Writing the wrist in the base's
-cylindrical frame, e_r = (c1, s1, 0), e_t = (−s1, c1, 0), R = a1 + X the signed radial
-distance of the wrist, X = a2 c2 + a3 c23, Y = a2 s2 + a3 s23 = w_z − d1 (θ = q + offset)::
+q̇, q̈, q⃛ — the exact reference that the generic joint path of the study (any arm,
+:mod:`legcore.problems.path_tracking_joints`) is tested against on the seed's arm. With the
+tool pointing straight down the wrist centre w is the tool point raised by d5, so ẇ = ṗ (the
+tool only turns about the vertical). Writing the wrist in the base's cylindrical frame,
+e_r = (c1, s1, 0), e_t = (−s1, c1, 0), R = a1 + X the signed radial distance of the wrist,
+X = a2 c2 + a3 c23, Y = a2 s2 + a3 s23 = w_z − d1 (θ = q + offset)::
 
     Ẋ = ẇ·e_r                θ̇1 = ẇ·e_t / R
     Ẍ = ẅ·e_r + R θ̇1²        θ̈1 = (ẅ·e_t − 2 Ẋ θ̇1) / R
@@ -33,13 +41,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
+from scipy.interpolate import PPoly
 
 from legcore.ik.arm5 import Arm5Geometry
 from legcore.trajectories.paths import Arc, Line, Plane
 
-__all__ = ["ArcLengthPath", "arm5_down_rates"]
+__all__ = ["ArcLengthPath", "arm5_down_rates", "compose_ppoly", "peak_abs"]
 
 FloatArray = NDArray[np.float64]
 
@@ -164,3 +174,92 @@ def arm5_down_rates(
 
     return stack(w1, w2, w23), stack(a1, a2_, a23), stack(j1, j2_, j23)
 
+
+
+@numba.njit(cache=True, nogil=True)
+def _compose_kernel(x: FloatArray, c: FloatArray, sig: FloatArray,
+                    out: FloatArray) -> None:  # pragma: no cover - compiled
+    """out (4, N, n): q, q̇, q̈, q⃛ of the PPoly (x, c) composed with sig (4, N)."""
+    deg = c.shape[0] - 1
+    m = c.shape[1]
+    n = c.shape[2]
+    N = sig.shape[1]
+    i = 0
+    for s in range(N):
+        xv = sig[0, s]
+        # interval: x[i] <= xv < x[i+1] (the last one closed; extrapolated outside), as scipy's
+        if not x[i] <= xv < x[i + 1]:  # else: the previous sample's interval (σ rises)
+            lo = 0
+            hi = m + 1  # x[lo] <= xv < x[hi] with x[m + 1] = +inf
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if xv < x[mid]:
+                    hi = mid
+                else:
+                    lo = mid
+            i = min(lo, m - 1)  # below x[0]: 0; at or beyond x[m]: the last interval
+        h = xv - x[i]
+        s1 = sig[1, s]
+        s2 = sig[2, s]
+        s3 = sig[3, s]
+        for j in range(n):
+            # Horner for Q(h) and, differentiating each step, its first three derivatives
+            g0 = c[0, i, j]
+            g1 = 0.0
+            g2 = 0.0
+            g3 = 0.0
+            for k in range(1, deg + 1):
+                g3 = g3 * h + 3.0 * g2
+                g2 = g2 * h + 2.0 * g1
+                g1 = g1 * h + g0
+                g0 = g0 * h + c[k, i, j]
+            # chain rule (compose_time_law)
+            out[0, s, j] = g0
+            out[1, s, j] = g1 * s1
+            out[2, s, j] = g2 * s1 * s1 + g1 * s2
+            out[3, s, j] = g3 * s1 * s1 * s1 + 3.0 * g2 * s1 * s2 + g1 * s3
+
+
+def compose_ppoly(poly: PPoly, sig: FloatArray) -> FloatArray:
+    """q, q̇, q̈, q⃛ (4, N, n) of x(t) = poly(σ(t)) from ``sig`` (4, N) = σ, σ̇, σ̈, σ⃛.
+
+    ``poly``: a PPoly (breaks in σ, values (n,)); at a break the interval after it is used and
+    outside the breaks the end polynomials are extrapolated, as ``poly(σ, nu)`` does. Equals
+    ``compose_time_law(np.stack([poly(σ, nu) for nu in range(4)]), sig)`` to rounding (~1e-15
+    relative: Horner's scheme in place of scipy's power sums).
+    """
+    x = np.ascontiguousarray(poly.x, dtype=np.float64)
+    c = np.ascontiguousarray(poly.c, dtype=np.float64)
+    if poly.extrapolate is not True or x.size < 2 or np.any(np.diff(x) < 0.0):
+        raise ValueError("poly: needs increasing breaks and extrapolate=True")
+    if c.ndim != 3:
+        raise ValueError(f"poly: expected vector values (coefficients (k, m, n)), got {c.shape}")
+    sig = np.ascontiguousarray(sig, dtype=np.float64)
+    if sig.ndim != 2 or sig.shape[0] != 4:
+        raise ValueError(f"sig: expected shape (4, N), got {sig.shape}")
+    out = np.empty((4, sig.shape[1], c.shape[2]))
+    _compose_kernel(x, c, sig, out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _peak_kernel(a: FloatArray, out: FloatArray) -> None:  # pragma: no cover - compiled
+    B, K, n = a.shape
+    for b in range(B):
+        for j in range(n):
+            out[b, j] = abs(a[b, 0, j])
+        for k in range(1, K):
+            for j in range(n):
+                v = abs(a[b, k, j])
+                if v > out[b, j] or v != v:  # NaN propagates, as in np.max
+                    out[b, j] = v
+
+
+def peak_abs(a: FloatArray) -> FloatArray:
+    """``np.abs(a).max(axis=1)`` (B, n) of ``a`` (B, K ≥ 1, n) in one pass (no |a| temporary)."""
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if a.ndim != 3 or a.shape[1] < 1:
+        raise ValueError(f"a: expected shape (B, K >= 1, n), got {a.shape}")
+    out = np.empty((a.shape[0], a.shape[2]))
+    _peak_kernel(a, out)
+    return out

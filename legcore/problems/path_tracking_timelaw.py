@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["RampShape", "TimeLaw", "build_time_law"]
+__all__ = ["RampShape", "TimeLaw", "build_time_law", "segment_profiles"]
 
 FloatArray = NDArray[np.float64]
 RampShape = Literal["linear", "cubic"]
@@ -224,3 +224,24 @@ def build_time_law(
         shrink=shrink,
         shape=shape,
     )
+
+
+def segment_profiles(V: FloatArray) -> list[str]:
+    """Per segment of cruise speeds ``V`` (n,) m/s, its pieces of the speed law: accel/decel at
+    the ends, blend-in/out where the cruise speed changes, constant while cruising (seed 004
+    names its s_k this way)."""
+    out = []
+    n = len(V)
+    for k in range(n):
+        parts = []
+        if k == 0:
+            parts.append("accel")
+        elif V[k - 1] != V[k]:
+            parts.append("blend-in")
+        parts.append("constant")
+        if k == n - 1:
+            parts.append("decel")
+        elif V[k + 1] != V[k]:
+            parts.append("blend-out")
+        out.append(" + ".join(parts))
+    return out

@@ -1,5 +1,12 @@
-"""``quadruped_gait`` — seed 003: the 4-beat walk of the animatronic quadruped, its servo table,
-and the step that walks with the least energy under a static stability margin.
+"""``quadruped_gait`` — seed 003: the 4-beat walk of a quadruped, its servo table, and the step
+that walks with the least energy under a static stability margin.
+
+Any quadruped with 2- or 3-joint legs, one at each corner of the body (the catalog's
+``animatronic_quadruped`` of seed 003; Solo12, ANYmal, Go1 … from their URDF): the legs come
+from the robot (:mod:`legcore.problems.quadruped_gait_legs`), their corner from the hip
+position. Every default is seed 003's value or, where the paper has none, ours for its robot
+(:mod:`legcore.problems.quadruped_gait_params`); a preset for another robot sets its own depth,
+stroke and reference posture (``examples/``).
 
 Source: seed 003 (Pailos, Bima, Libal 2017): 2-DOF legs (front elbow back, rear knee forward),
 law-of-cosines IK (eqs 5–9), the gait of its Fig. 8 / text ("the four legs out of phase by
@@ -15,15 +22,19 @@ Model (SI units; body frame x forward, y left, z up; leg frame x down, y forward
   s at the depth H below the hip, centred at c, and a C² swing of height h (built-in profile or
   the user's ``swing_points``). Cycle time ``T = s / (β v)``; distance per cycle ``D = v T =
   s / β``.
-* **IK** per sample and leg with the anatomical branch (:func:`legcore.ik.leg2.leg2_ik`, branch
-  from ``robot.meta["branch"]``, joint limits enforced); joint rates from the analytic Jacobian.
+* **Foot path in the body frame**: the cycle of every leg lies in the vertical plane through
+  its hip, ``foot_lateral`` beside it (default: where the leg's foot is at ``q_ref``).
+* **IK** per sample and leg: the closed form with the anatomical branch for seed 003's 2-joint
+  legs (:func:`legcore.ik.leg2.leg2_ik`, branch from ``robot.meta["branch"]``, joint limits
+  enforced; analytic joint rates), :func:`legcore.ik.solve` along the cycle from the posture
+  ``q_ref`` for any other leg (rates from the Jacobian).
 * **Loads**: the stance feet carry the weight of the whole robot (body + legs) in static
   equilibrium (vertical reactions, :func:`~legcore.problems.quadruped_gait_cycle.stance_loads`,
   the load handed over linearly during the four-foot phases); each leg's joint torques are
   ``τ = RNEA(q, q̇, q̈) − J_vᵀ F_foot`` (the body moves uniformly, so the fixed-base RNEA of
   each leg is exact for its own links). ``stance_load="none"`` leaves the feet unloaded
   (swing-only dynamics).
-* **Objective**: mechanical energy of all 8 joints over one cycle, ``E = Σ ∫ |τ q̇| dt``
+* **Objective**: mechanical energy of all joints over one cycle, ``E = Σ ∫ |τ q̇| dt``
   (``energy_model``), per metre walked (``E / D``, J/m; default) or per cycle (J).
 * **Constraints** ``G ≤ 0`` (columns): (0) stability margin: ``margin_min − min_t margin`` in
   mm, the margin being :func:`legcore.gaits.stability_margin` of the whole robot's COM (body
@@ -34,12 +45,13 @@ Model (SI units; body frame x forward, y left, z up; leg frame x down, y forward
 * **Decision** ``x = (s, h, β)``: step length (m), step height (m), duty factor, within
   ``*_bounds`` (equal bounds fix a variable).
 
-Outputs: the decoded :class:`~legcore.problems.study.Solution` has the 8-joint ``Motion`` (legs
-side by side, ``"FL.shoulder"`` …), the seed 000 metric table per joint, and in ``extra`` the
-``servo_table`` (one row per time step, one column per servo, with the servo mapping
-``servo = offset + direction · Ang``, ``Ang3 = 90° − q3``, ``Ang4 = 90° − q3 − q4``), the
+Outputs: the decoded :class:`~legcore.problems.study.Solution` has the ``Motion`` of all joints
+(legs side by side, ``"FL.shoulder"`` …), the seed 000 metric table per joint, and in ``extra``
+the ``servo_table`` (one row per time step, one column per servo, with the servo mapping
+``servo = offset + direction · Ang``; seed 003's robot: ``Ang3 = 90° − q3``,
+``Ang4 = 90° − q3 − q4``; others: the joint angles), and for 2-joint closed-form legs the
 ``table2`` (the stance stroke in the paper's 48 positions and columns) and ``table2_paper`` (the
-printed rows beside ours).
+printed rows beside ours, ``compare_table2``).
 
 Seed data and our choices (docs/studies.md (seed 003)): depth H = 0.1648 m, stroke
 centre c = −1.2 mm and the default step length 0.119 m come from Table 2's first and last
@@ -49,162 +61,47 @@ body speed: v = 0.03 m/s, h = 0.03 m and β = 0.8 are ours.
 
 from __future__ import annotations
 
-import math
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, field_validator, model_validator
 
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import integrate
 from legcore.gaits import QUADRUPED_WALK, Gait, leg_phase, stability_margin, support_polygon
-from legcore.ik.leg2 import leg2_fk, leg2_ik
 from legcore.joint_metrics import joint_metrics
-from legcore.kinematics import fk, frames
+from legcore.kinematics import frames
 from legcore.problems.quadruped_gait_cycle import (
     SwingShape,
     foot_cycle,
-    leg2_rates,
     load_share,
-    servo_angles_deg,
     stance_loads,
 )
-from legcore.problems.study import Motion, Solution, Study, StudyParams, StudyProblem
+from legcore.problems.quadruped_gait_legs import GaitLeg, gait_legs
+from legcore.problems.quadruped_gait_params import Params
+from legcore.problems.quadruped_gait_tables import (
+    servo_mapping,
+    servo_table,
+    table2,
+    table2_comparison,
+)
+from legcore.problems.study import Motion, Solution, Study, StudyProblem
+from legcore.robots.capabilities import Needs
 from legcore.robots.catalog.animatronic_quadruped import TABLE2
 from legcore.robots.legged import LeggedRobot
-from legcore.robots.spec import DHRobotSpec
 
-__all__ = ["Params", "QuadrupedGaitProblem", "STUDY", "TABLE2_PAPER", "build"]
+__all__ = ["Params", "QuadrupedGaitProblem", "STUDY", "TABLE2_PAPER", "UNREACHABLE_F", "build"]
 
 FloatArray = NDArray[np.float64]
 
-G0 = 9.81  # m/s², as the catalog's leg models
 #: Objective value of a step whose feet cannot follow the path (finite, so that optimisers and
 #: fronts stay numeric; the reach constraint marks the row infeasible).
 UNREACHABLE_F = 1.0e6
 _EVENT_EPS = 1e-7  # phase offset of the margin samples just before/after a lift-off/touch-down
-_SINGULAR = 1e-6  # |sin q4| below which a leg counts as straight (singular)
 
 #: Seed 003 Table 2 as printed: position, front (Ang3, Ang4, q3DA, q4DA), rear (Ang3, Ang4,
-#: q3TA, q4TA), degrees — kept with the robot in the catalog.
+#: q3TA, q4TA), degrees — kept with its robot in the catalog (``compare_table2``).
 TABLE2_PAPER: tuple[tuple[int, tuple[int, ...], tuple[int, ...]], ...] = TABLE2
-_TABLE2_COLUMNS = ("position", "Ang3", "Ang4", "q3DA", "q4DA", "Ang3", "Ang4", "q3TA", "q4TA")
-
-Pair = tuple[float, float]
-
-
-def _finite(name: str, v: float) -> float:
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be a finite number, got {v}")
-    return v
-
-
-class Params(StudyParams):
-    """Parameters of the ``quadruped_gait`` study (SI units; defaults = seed 003 where it has
-    them, see the module docstring for the ones we chose).
-
-    Default step (the ``default_step`` baseline, and what the optimum is compared with):
-    ``step_length`` s (m), ``step_height`` h (m), ``duty`` β. Search box: ``*_bounds``.
-    ``speed`` body speed v (m/s); ``depth`` foot depth below the hip in stance H (m);
-    ``stroke_center`` c (m, forward of the hip); ``swing_points`` optional user swing profile
-    ``[(ξ, η), …]`` (ξ from −0.5 at lift-off to 0.5 at touch-down, η ≥ 0 lift, 0 at both ends,
-    scaled so its peak is h); ``samples_per_cycle`` K (multiple of 4: the beats fall on the
-    grid); ``stability_margin`` required static margin (m); ``com_offset`` body COM from the
-    body centre (x, y) m; ``stance_load`` "body_weight" or "none"; ``energy_model``
-    "mechanical" (∫|τ q̇|) or "positive_work" (∫max(τ q̇, 0)); ``objective`` "energy_per_metre"
-    (J/m) or "energy_per_cycle" (J); ``servo_offset_deg`` / ``servo_direction`` per leg
-    (two servos each) override the catalog's ``meta["servo"]``; ``table_positions`` number of
-    stroke positions of the Table 2-like output (the paper's 48).
-    """
-
-    kind: Literal["quadruped_gait"] = "quadruped_gait"
-    step_length: float = Field(default=0.119, gt=0.0, le=1.0)
-    step_height: float = Field(default=0.03, ge=0.0, le=1.0)
-    duty: float = Field(default=0.8, gt=0.0, lt=1.0)
-    step_length_bounds: Pair = (0.04, 0.13)
-    step_height_bounds: Pair = (0.01, 0.05)
-    duty_bounds: Pair = (0.75, 0.9)
-    speed: float = Field(default=0.03, gt=0.0, le=10.0)
-    depth: float = Field(default=0.1648, gt=0.0, le=10.0)
-    stroke_center: float = Field(default=-0.0012, ge=-10.0, le=10.0)
-    swing_points: tuple[Pair, ...] | None = Field(default=None, max_length=1000)
-    samples_per_cycle: int = Field(default=64, ge=16, le=4096)
-    stability_margin: float = Field(default=0.001, ge=-1.0, le=1.0)
-    com_offset: Pair = (0.0, 0.0)
-    stance_load: Literal["body_weight", "none"] = "body_weight"
-    energy_model: Literal["mechanical", "positive_work"] = "mechanical"
-    objective: Literal["energy_per_metre", "energy_per_cycle"] = "energy_per_metre"
-    servo_offset_deg: dict[str, Pair] | None = None
-    servo_direction: dict[str, tuple[int, int]] | None = None
-    table_positions: int = Field(default=48, ge=2, le=1000)
-
-    @field_validator(
-        "step_length", "step_height", "duty", "speed", "depth", "stroke_center", "stability_margin"
-    )
-    @classmethod
-    def _finite_scalar(cls, v: float) -> float:
-        return _finite("value", v)
-
-    @field_validator("com_offset")
-    @classmethod
-    def _finite_pair(cls, v: Pair) -> Pair:
-        if not all(math.isfinite(a) and abs(a) <= 10.0 for a in v):
-            raise ValueError(f"must be two finite numbers within ±10 m, got {v}")
-        return v
-
-    @field_validator("samples_per_cycle")
-    @classmethod
-    def _multiple_of_4(cls, v: int) -> int:
-        if v % 4:
-            raise ValueError(f"must be a multiple of 4 (the four beats of the walk), got {v}")
-        return v
-
-    @field_validator("swing_points")
-    @classmethod
-    def _swing_points(cls, v: tuple[Pair, ...] | None) -> tuple[Pair, ...] | None:
-        if v is not None:
-            SwingShape(tuple(v))  # raises ValueError with the reason
-        return v
-
-    @field_validator("servo_direction")
-    @classmethod
-    def _directions(cls, v: dict[str, tuple[int, int]] | None) -> Any:
-        if v is not None:
-            for leg, d in v.items():
-                if any(x not in (-1, 1) for x in d):
-                    raise ValueError(f"{leg}: directions must be +1 or -1, got {d}")
-        return v
-
-    @field_validator("servo_offset_deg")
-    @classmethod
-    def _offsets(cls, v: dict[str, Pair] | None) -> Any:
-        if v is not None:
-            for leg, o in v.items():
-                if not all(math.isfinite(a) for a in o):
-                    raise ValueError(f"{leg}: offsets must be finite degrees, got {o}")
-        return v
-
-    @model_validator(mode="after")
-    def _bounds(self) -> Params:
-        limits = {
-            "step_length_bounds": (0.0, 1.0, False),
-            "step_height_bounds": (0.0, 1.0, True),
-            "duty_bounds": (0.0, 1.0, False),
-        }
-        for name, (lo_min, hi_max, closed) in limits.items():
-            lo, hi = getattr(self, name)
-            if not (math.isfinite(lo) and math.isfinite(hi)):
-                raise ValueError(f"{name}: must be finite, got {(lo, hi)}")
-            if lo > hi:
-                raise ValueError(f"{name}: lower bound {lo} above upper bound {hi}")
-            low_ok = lo >= lo_min if closed else lo > lo_min
-            if not low_ok or hi > hi_max or (name == "duty_bounds" and hi >= 1.0):
-                raise ValueError(
-                    f"{name}: must lie in {'[' if closed else '('}{lo_min}, {hi_max}"
-                    f"{')' if name == 'duty_bounds' else ']'}, got {(lo, hi)}"
-                )
-        return self
 
 
 class QuadrupedGaitProblem(StudyProblem):
@@ -217,26 +114,22 @@ class QuadrupedGaitProblem(StudyProblem):
         self.robot = robot
         self.params = params
         self.gait: Gait = QUADRUPED_WALK
-        self.legs = _check_robot(robot, self.gait)
+        self.gait_legs: tuple[GaitLeg, ...] = gait_legs(robot, params.q_ref, params.foot_lateral)
+        self.legs = tuple(g.leg for g in self.gait_legs)
         self.leg_names = tuple(leg.name for leg in self.legs)
-        self.offsets = np.array(
-            [self.gait.offsets[self.gait.legs.index(n)] for n in self.leg_names]
-        )
-        meta = robot.meta or {}
-        self.branch = np.array([_branch(meta, leg) for leg in self.legs], dtype=float)
-        self.L = [tuple(float(j.a) for j in leg.robot.spec.joints) for leg in self.legs]
-        # link COMs (n, 3) in DH link frame i, the frames `legcore.kinematics.frames` returns
-        self.link_com = [np.array([j.com for j in leg.robot.spec.joints]) for leg in self.legs]
+        self.roles = tuple(g.role for g in self.gait_legs)
+        self.offsets = np.array([self.gait.offsets[self.gait.legs.index(r)] for r in self.roles])
+        self.numeric = params.ik == "numeric"
         self.shape = None if params.swing_points is None else SwingShape(tuple(params.swing_points))
         self.mass = float(robot.body_mass) + sum(
             float(leg.robot.chain.mass.sum()) for leg in self.legs
         )
-        self.servo = _servo_mapping(meta, self.leg_names, params)
+        self.g = float(np.linalg.norm(self.legs[0].robot.chain.gravity))
+        self.servo = servo_mapping(dict(robot.meta or {}), self.gait_legs, params)
         self.joint_names = tuple(
-            f"{leg.name}.{j.name or f'q{i + 1}'}"
-            for leg in self.legs
-            for i, j in enumerate(leg.robot.spec.joints)
+            f"{leg.name}.{name}" for leg in self.legs for name in _joint_names(leg.robot)
         )
+        self.n_joints = tuple(leg.robot.nq for leg in self.legs)
         self.objective_names = (params.objective,)
         self.n_samples = (params.samples_per_cycle + 1) * len(self.legs)
         p = params
@@ -270,36 +163,30 @@ class QuadrupedGaitProblem(StudyProblem):
         events = np.concatenate((self.offsets[None, :] + 0 * beta, self.offsets + (1.0 - beta)), -1)
         ev = np.concatenate((events - _EVENT_EPS, events + _EVENT_EPS), -1) % 1.0
         phi = np.concatenate((grid, ev), -1)  # (B, M)
-        u = leg_phase(self.gait, phi)[..., [self.gait.legs.index(n) for n in self.leg_names]]
+        u = leg_phase(self.gait, phi)[..., [self.gait.legs.index(r) for r in self.roles]]
+        near = np.rint(ev * K).astype(np.int64)  # grid sample next to each event sample
         n_leg = len(self.legs)
-        Tt = T[..., None]
         feet, support, share, ok_all = [], [], [], []
         q_l, qd_l, qdd_l, com_num = [], [], [], 0.0
-        for j, leg in enumerate(self.legs):
-            rb = leg.robot
+        for j, g in enumerate(self.gait_legs):
+            leg, rb = g.leg, g.leg.robot
             pos, dpos, ddpos, st = foot_cycle(
                 u[..., j], s, h, beta, p.depth, p.stroke_center, self.shape
             )
-            q, ok = leg2_ik(pos, self.L[j], self.branch[j], rb.q_min, rb.q_max)
-            ok &= np.abs(np.sin(np.where(ok, q[..., 1], 0.0))) > _SINGULAR
-            q = np.where(ok[..., None], q, rb.home)
-            p3 = np.concatenate((pos, np.zeros(pos.shape[:-1] + (1,))), -1)
-            feet.append(leg.foot_in_body(p3))
+            qk, qd, qdd, ok_k = g.motion(pos[:, : K + 1], dpos[:, : K + 1], ddpos[:, : K + 1],
+                                         T, self.numeric)
+            q0 = np.take_along_axis(qk, near[..., None], axis=1)
+            qe, ok_e = g.posture(pos[:, K + 1 :], q0, self.numeric)
+            q = np.concatenate((qk, qe), 1)
+            feet.append(leg.hip[:3, 3] + g.cycle_to_body(pos))
             support.append(st)
             share.append(load_share(u[..., j], beta, np.maximum(beta - 0.75, 0.0)))
-            ok_all.append(ok)
+            ok_all.append(np.concatenate((ok_k, ok_e), 1))
             # link COMs (leg base frame) -> body frame, mass-weighted
             F = frames(rb, q)  # (B, M, n+1, 4, 4)
-            c_link = np.einsum("...lij,lj->...li", F[..., 1:, :3, :3], self.link_com[j])
+            c_link = np.einsum("...lij,lj->...li", F[..., 1:, :3, :3], g.com_link)
             c_link = c_link + F[..., 1:, :3, 3]
             com_num = com_num + np.einsum("...li,l->...i", leg.foot_in_body(c_link), rb.chain.mass)
-            qk = q[:, : K + 1]
-            qd, qdd, _ = leg2_rates(qk, dpos[:, : K + 1] / Tt, ddpos[:, : K + 1] / Tt**2, self.L[j])
-            bad_rate = ~np.all(np.isfinite(qd) & np.isfinite(qdd), axis=-1)
-            qd = np.where(bad_rate[..., None], 0.0, qd)
-            qdd = np.where(bad_rate[..., None], 0.0, qdd)
-            ok_all[-1] = ok_all[-1].copy()
-            ok_all[-1][:, : K + 1] &= ~bad_rate
             q_l.append(qk)
             qd_l.append(qd)
             qdd_l.append(qdd)
@@ -318,7 +205,7 @@ class QuadrupedGaitProblem(StudyProblem):
                 feet_a[:, : K + 1, :, :2],
                 np.stack(share, -1)[:, : K + 1],
                 com[:, : K + 1, :2],
-                self.mass * G0,
+                self.mass * self.g,
             )
         else:
             loads = np.zeros((B, K + 1, n_leg))
@@ -330,15 +217,15 @@ class QuadrupedGaitProblem(StudyProblem):
             rb = leg.robot
             tau = inverse_dynamics(rb, q_l[j], qd_l[j], qdd_l[j])
             up = leg.hip[:3, :3].T @ np.array([0.0, 0.0, 1.0])  # body "up" in the leg frame
-            Jv = _leg2_jv(q_l[j], self.L[j])  # (B, K+1, 2, 2): rows x, y of the leg frame
-            F_leg = loads[..., j, None] * up[:2]  # ground reaction on the foot, leg frame x, y
+            Jv = _foot_jacobian(rb, q_l[j])  # (B, K+1, 3, n)
+            F_leg = loads[..., j, None] * up  # vertical ground reaction on the foot, leg frame
             tau = tau - np.einsum("...ij,...i->...j", Jv, F_leg)
             power = tau * qd_l[j]
             if p.energy_model == "positive_work":
                 power = np.maximum(power, 0.0)
             else:
                 power = np.abs(power)
-            e = integrate(power, t)  # (B, 2)
+            e = integrate(power, t)  # (B, n)
             E = E + e.sum(-1)
             E_joint.append(e)
             tau_l.append(tau)
@@ -411,7 +298,7 @@ class QuadrupedGaitProblem(StudyProblem):
         body = np.stack((x_body, np.zeros_like(t), np.full_like(t, body_h)), -1)
         feet_w = d["feet"] + body[:, None, :]
         com_w = d["com"] + body
-        tool_leg = self.leg_names.index("FR") if "FR" in self.leg_names else 0
+        tool_leg = self.roles.index("FR")
         # seed 000 metrics per joint; D = the FR foot's path relative to the body over a cycle
         jerk = _periodic_jerk(t, qdd)
         jm = joint_metrics(t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=d["feet"][:, tool_leg])
@@ -419,7 +306,7 @@ class QuadrupedGaitProblem(StudyProblem):
         feasible = bool(np.all(G <= 0.0))
         E, D = float(d["E"]), float(d["D"])
         E_joint = d["E_joint"]
-        n_j = [leg.robot.nq for leg in self.legs]
+        n_j = list(self.n_joints)
         starts = np.cumsum([0, *n_j])
         sup = d["support"]
         swing_mask = ~np.repeat(sup, n_j, axis=-1)
@@ -508,6 +395,8 @@ class QuadrupedGaitProblem(StudyProblem):
             "table_columns": list(self.joint_names),
             "servo_table": self.servo_table(t, q),
             "table2": self.table2(float(x[0])),
+            "ik": {g.name: ("closed form leg2" if g.closed_form and not self.numeric
+                            else "numerical (legcore.ik.solve)") for g in self.gait_legs},
         }
         return Solution(
             x=x.copy(),
@@ -519,105 +408,19 @@ class QuadrupedGaitProblem(StudyProblem):
         )
 
     def servo_table(self, t: FloatArray, q: FloatArray) -> dict[str, Any]:
-        """Servo commands (deg) per time step (rows) and servo (columns) over one cycle.
+        """Servo commands (deg) per time step and servo over one cycle (see
+        :func:`~legcore.problems.quadruped_gait_tables.servo_table`)."""
+        return servo_table(self.gait_legs, self.servo, self.joint_names, t, q)
 
-        ``t`` (K+1,) s, ``q`` (K+1, 8) rad (legs side by side); the closing sample is left out,
-        so the K rows are positions 1…K of the cycle.
-        """
-        servos, cols = [], []
-        for j, leg in enumerate(self.legs):
-            m = self.servo[leg.name]
-            _, cmd = servo_angles_deg(
-                q[:-1, 2 * j : 2 * j + 2],
-                m["link_offset"],
-                m["link_matrix"],
-                m["servo_offset"],
-                m["servo_direction"],
-            )
-            cols.append(cmd)
-            for i, jn in enumerate(("q3", "q4")):
-                servos.append(
-                    {
-                        "name": self.joint_names[2 * j + i],
-                        "leg": leg.name,
-                        "paper_leg": m["paper_name"],
-                        "dh_angle": jn,
-                        "link_angle": ("Ang3", "Ang4")[i],
-                        "offset_deg": m["servo_offset"][i],
-                        "direction": m["servo_direction"][i],
-                    }
-                )
-        cmd_all = np.concatenate(cols, -1)
-        rows = [
-            [k + 1, round(float(t[k]), 6), *(round(float(v), 2) for v in cmd_all[k])]
-            for k in range(cmd_all.shape[0])
-        ]
-        return {
-            "mapping": "servo = offset + direction * Ang; Ang3 = 90 - q3, Ang4 = 90 - q3 - q4 "
-            "(deg; q3, q4 the DH angles of seed 003)",
-            "columns": ["position", "t_s", *self.joint_names],
-            "servos": servos,
-            "rows": rows,
-        }
+    def table2(self, s: float, positions: int | None = None) -> dict[str, Any] | None:
+        """Seed 003 Table 2 layout of the stance stroke of step length ``s`` (m), or None for
+        legs without the 2-joint closed form (:func:`~legcore.problems.quadruped_gait_tables.
+        table2`)."""
+        return table2(self.gait_legs, self.servo, self.params, s, positions)
 
-    def table2(self, s: float, positions: int | None = None) -> dict[str, Any]:
-        """Seed 003 Table 2 layout for the stance stroke of step length ``s`` (m): ``positions``
-        equally spaced foot positions from touch-down (front) to lift-off (back) at the depth H,
-        front-right and rear-right legs: link angles Ang3/Ang4 and DH q3/q4 in degrees (DH
-        angles wrapped into [0, 360) as the paper prints them; its front q3 column adds 360°
-        to every row, e.g. 369 for 9°). Rows of unreachable positions hold None."""
-        p = self.params
-        n = positions or p.table_positions
-        y = p.stroke_center + 0.5 * s - s * np.linspace(0.0, 1.0, n)
-        P = np.stack((np.full(n, p.depth), y), -1)
-        cols: list[FloatArray] = []
-        legs = {}
-        for name in ("FR", "RR"):
-            j = self.leg_names.index(name)  # the legs were checked: FL, FR, RL, RR
-            leg = self.legs[j]
-            legs[name] = leg.name
-            q, ok = leg2_ik(P, self.L[j], self.branch[j], leg.robot.q_min, leg.robot.q_max)
-            m = self.servo[leg.name]
-            ang, _ = servo_angles_deg(q, m["link_offset"], m["link_matrix"], (0.0, 0.0), (1, 1))
-            cols += [ang, np.mod(np.degrees(q), 360.0)]
-        A = np.concatenate(cols, -1)
-        rows = [
-            [k + 1, *(None if not np.isfinite(v) else round(float(v), 2) for v in A[k])]
-            for k in range(n)
-        ]
-        return {
-            "legs": legs,
-            "columns": list(_TABLE2_COLUMNS),
-            "rows": rows,
-            "stroke": {"step_length_m": s, "depth_m": p.depth, "center_m": p.stroke_center},
-        }
-
-    def table2_comparison(self) -> dict[str, Any]:
-        """The paper's printed Table 2 rows beside ours at the same stroke positions (default
-        step length), with the differences (deg) and the foot depth of the printed rows."""
-        ours = self.table2(self.params.step_length, 48)["rows"]
-        rows = []
-        for pos, front, rear in TABLE2_PAPER:
-            printed = [*front, *rear]
-            mine = ours[pos - 1][1:]
-            diff = [
-                None if m is None else round(_wrap180(m - v), 2)
-                for m, v in zip(mine, printed, strict=True)
-            ]
-            depths = []
-            for k, row in enumerate((front, rear)):
-                q = np.radians([90.0 - row[0], row[0] - row[1]])
-                depths.append(round(float(leg2_fk(q, self.L[0 if k == 0 else -1])[0]), 5))
-            rows.append(
-                {
-                    "position": pos,
-                    "paper": printed,
-                    "ours": mine,
-                    "diff_deg": diff,
-                    "paper_foot_depth_m": depths,
-                }
-            )
-        return {"columns": list(_TABLE2_COLUMNS[1:]), "rows": rows}
+    def table2_comparison(self) -> dict[str, Any] | None:
+        """Seed 003's printed Table 2 beside ours (None where :meth:`table2` is None)."""
+        return table2_comparison(self.gait_legs, self.servo, self.params, TABLE2_PAPER)
 
     def baseline_solutions(self) -> dict[str, Solution]:
         p = self.params
@@ -628,7 +431,13 @@ class QuadrupedGaitProblem(StudyProblem):
         return out
 
     def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
-        return {"table2_paper": self.table2_comparison()}
+        out: dict[str, Any] = {"legs": dict(zip(self.leg_names, self.roles, strict=True))}
+        if self.params.compare_table2:
+            cmp = self.table2_comparison()
+            if cmp is not None:
+                out["table2_paper"] = cmp
+        return out
+
 
 
 def _periodic_jerk(t: FloatArray, qdd: FloatArray) -> FloatArray:
@@ -640,108 +449,25 @@ def _periodic_jerk(t: FloatArray, qdd: FloatArray) -> FloatArray:
     return np.concatenate((j, j[:1]), 0)
 
 
-def _wrap180(a: float) -> float:
-    return (a + 180.0) % 360.0 - 180.0
+def _foot_jacobian(rb: Any, q: FloatArray) -> FloatArray:
+    """Translational foot Jacobian (..., 3, n) of a leg chain in its base frame."""
+    from legcore.kinematics import jacobian
+
+    return jacobian(rb, q)[..., :3, :]
 
 
-def _leg2_jv(q: FloatArray, L: tuple[float, ...]) -> FloatArray:
-    """Planar foot Jacobian (..., 2, 2) of the 2-DOF leg: rows (x, y) of the leg frame."""
-    l1, l2 = L
-    a, b = q[..., 0], q[..., 0] + q[..., 1]
-    s1, c1, s12, c12 = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
-    return np.stack(
-        (
-            np.stack((-(l1 * s1 + l2 * s12), -l2 * s12), -1),
-            np.stack((l1 * c1 + l2 * c12, l2 * c12), -1),
-        ),
-        -2,
-    )
-
-
-def _branch(meta: dict[str, Any], leg: Any) -> int:
-    br = meta.get("branch", {})
-    if isinstance(br, dict) and leg.name in br:
-        return int(br[leg.name])
-    rb = leg.robot  # the joint limits of q4 hold the branch
-    if rb.q_min[1] >= 0.0:
-        return 1
-    if rb.q_max[1] <= 0.0:
-        return -1
-    raise ValueError(
-        f"robot: leg {leg.name!r} has no branch in meta['branch'] and its knee limits "
-        f"[{rb.q_min[1]}, {rb.q_max[1]}] do not decide one"
-    )
-
-
-def _check_robot(robot: Any, gait: Gait) -> tuple[Any, ...]:
-    """The robot's legs, checked: four 2-DOF ``leg2`` legs named as the gait's, consistent
-    planar kinematics and gravity pointing down the body's z."""
-    if not isinstance(robot, LeggedRobot):
-        raise ValueError("robot: the quadruped_gait study needs a legged robot")
-    names = tuple(leg.name for leg in robot.legs)
-    if sorted(names) != sorted(gait.legs):
-        raise ValueError(f"robot: needs legs {list(gait.legs)} (4-beat walk), got {list(names)}")
-    for leg in robot.legs:
-        rb = leg.robot
-        if rb.nq != 2 or rb.ik_family != "leg2" or not isinstance(rb.spec, DHRobotSpec):
-            raise ValueError(
-                f"robot: leg {leg.name!r} must be a 2-DOF DH leg with ik 'leg2' (seed 003), "
-                f"got nq={rb.nq}, ik={rb.ik_family!r}"
-            )
-        L = [float(j.a) for j in rb.spec.joints]
-        q_test = rb.home + np.array([[0.0, 0.0], [0.3, 0.2], [-0.4, 0.5]])
-        p_model = fk(rb, q_test)[:, :3, 3]
-        p_leg2 = leg2_fk(q_test, L)
-        if not np.allclose(p_model, p_leg2, atol=1e-9):
-            raise ValueError(
-                f"robot: leg {leg.name!r} kinematics differ from the leg2 convention "
-                f"(x down, y forward, a = link lengths, alpha = 0)"
-            )
-        g_body = leg.hip[:3, :3] @ rb.chain.gravity
-        g_norm = max(float(np.linalg.norm(g_body)), 1e-300)
-        if not np.allclose(g_body / g_norm, [0.0, 0.0, -1.0], atol=1e-6):
-            raise ValueError(
-                f"robot: leg {leg.name!r} gravity {rb.chain.gravity.tolist()} (leg frame) does "
-                f"not point down the body's z axis"
-            )
-    return tuple(robot.legs)
-
-
-def _servo_mapping(
-    meta: dict[str, Any], legs: tuple[str, ...], params: Params
-) -> dict[str, dict[str, Any]]:
-    servo = meta.get("servo", {}) if isinstance(meta.get("servo", {}), dict) else {}
-    link_offset = tuple(servo.get("link_angle_offset_deg", (90.0, 90.0)))
-    link_matrix = tuple(
-        tuple(r) for r in servo.get("link_angle_matrix", ((-1.0, 0.0), (-1.0, -1.0)))
-    )
-    offs = dict(servo.get("servo_offset_deg", {}))
-    dirs = dict(servo.get("servo_direction", {}))
-    for name, table in (
-        ("servo_offset_deg", params.servo_offset_deg),
-        ("servo_direction", params.servo_direction),
-    ):
-        if table is not None:
-            unknown = sorted(set(table) - set(legs))
-            if unknown:
-                raise ValueError(f"{name}: unknown legs {unknown}; legs are {list(legs)}")
-    offs.update(params.servo_offset_deg or {})
-    dirs.update(params.servo_direction or {})
-    names = meta.get("paper_names", {})
-    return {
-        n: {
-            "link_offset": link_offset,
-            "link_matrix": link_matrix,
-            "servo_offset": tuple(float(v) for v in offs.get(n, (0.0, 0.0))),
-            "servo_direction": tuple(int(v) for v in dirs.get(n, (1, 1))),
-            "paper_name": names.get(n, n) if isinstance(names, dict) else n,
-        }
-        for n in legs
-    }
+def _joint_names(rb: Any) -> tuple[str, ...]:
+    spec = rb.spec
+    joints = getattr(spec, "joints", None)
+    if isinstance(joints, list):
+        return tuple(j.name or f"q{i + 1}" for i, j in enumerate(joints))
+    return tuple(list(rb.model.names)[1:])
 
 
 def build(robot: Any, params: Params) -> QuadrupedGaitProblem:
-    """The study's problem for ``robot`` (a 4-legged :class:`LeggedRobot`) and ``params``."""
+    """The study's problem for ``robot`` (a quadruped :class:`LeggedRobot`) and ``params``."""
+    if not isinstance(params, Params):
+        params = Params.model_validate(params)
     return QuadrupedGaitProblem(robot, params)
 
 
@@ -766,4 +492,12 @@ STUDY = Study(
     default_generations=40,
     build=build,
     robot_kinds=("legged",),
+    needs=(Needs(legged=True, n_legs=(4,), leg_joints=(2, 3), revolute=True),),
+    description=(
+        "A quadruped (four legs of 2-3 joints, one at each corner) walks the 4-beat walk; "
+        "every foot follows a level stance stroke and a smooth swing, solved by IK per sample. "
+        "The optimiser picks step length, step height and duty factor for the least "
+        "mechanical energy per metre under a static stability margin, joint speed and torque "
+        "limits. Reports the servo table per time step."
+    ),
 )

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict
 
 from legcore.problems.base import Problem
+from legcore.robots.capabilities import Needs, capabilities, refusal
 
 __all__ = ["Box", "Motion", "Solution", "Study", "StudyParams", "StudyProblem"]
 
@@ -149,6 +150,13 @@ class StudyProblem(Problem):
     def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
         return {}
 
+    def free_start(self) -> tuple[str, FloatArray] | None:
+        """The solution the problem's encoding or initialisation gives without any search,
+        as ``(what it is, x)`` — e.g. the coordinated motion that all-zero genes decode to, or
+        the original placement the population is seeded with — or None. A result reports it
+        beside the optimum so that nobody credits the optimiser with what the coding gave."""
+        return None
+
     def decode(self, x: np.ndarray) -> dict[str, Any]:
         return self.solution(np.asarray(x, dtype=float)).summary()
 
@@ -160,6 +168,14 @@ class Study:
     ``default_optimizer`` is ``{"kind": ..., "params": {...}}`` with the seed's settings;
     ``default_generations`` the seed's budget; ``robot_kinds`` which robots it accepts
     ("serial" and/or "legged").
+
+    ``needs``: what the study needs from a robot, as alternatives (a robot is accepted when it
+    meets one of them; empty: any robot of ``robot_kinds``) — checked by :meth:`refusal`
+    before ``build`` (``legcore.problems.registry`` wraps ``build`` with that check).
+    ``description``: a paragraph for listings (``GET /studies``, ``legopt studies``);
+    ``plugin``: the distribution that registered the kind (None for a built-in kind).
+    ``build`` is wrapped on creation so that it refuses a robot :meth:`refusal` rejects with
+    ``ValueError("robot: <kind> needs …")`` before the study's own code runs.
     """
 
     kind: str
@@ -171,3 +187,38 @@ class Study:
     default_generations: int
     build: Callable[[Any, Any], StudyProblem]
     robot_kinds: tuple[str, ...] = ("serial",)
+    needs: tuple[Needs, ...] = ()
+    description: str = ""
+    plugin: str | None = None
+
+    def __post_init__(self) -> None:
+        inner = getattr(self.build, "_unchecked", self.build)
+
+        def build(robot: Any, params: Any) -> StudyProblem:
+            reason = self.refusal(robot)
+            if reason is not None:
+                raise ValueError(f"robot: {reason}")
+            return inner(robot, params)
+
+        build._unchecked = inner  # type: ignore[attr-defined]
+        build.__doc__ = inner.__doc__
+        object.__setattr__(self, "build", build)
+
+    def refusal(self, robot: Any) -> str | None:
+        """Why this study cannot run on ``robot`` (naming the missing capability), or None.
+
+        The first unmet need of the alternative that matches the robot's kind (serial or
+        legged) is reported; a robot meeting any alternative is accepted.
+        """
+        kind = "legged" if capabilities(robot).kind == "legged" else "serial"
+        if kind not in self.robot_kinds:
+            return (f"{self.kind} needs a {' or '.join(self.robot_kinds)} robot; robot "
+                    f"{getattr(robot, 'name', '?')} is {kind}")
+        if not self.needs:
+            return None
+        reasons = [refusal(self.kind, n, robot) for n in self.needs]
+        if any(r is None for r in reasons):
+            return None
+        same = [r for n, r in zip(self.needs, reasons, strict=True)
+                if (n.legged and kind == "legged") or (n.serial and kind == "serial")]
+        return (same or reasons)[0]

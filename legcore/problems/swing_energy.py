@@ -1,14 +1,19 @@
 """``swing_energy`` — seed 000: GA energy optimisation of a walking-robot leg's transfer phase.
 
-Calderón, Bedolla & Szwedowicz (2015). One 3-DOF leg (``calderon_leg``: hip yaw + two pitch
-joints, seed 000 Table 1) swings freely (open chain) from a start to an end configuration in
-``T`` = 3 s. See ``docs/studies.md (seed 000)`` for the paper's tables beside ours.
+Calderón, Bedolla & Szwedowicz (2015). One leg swings freely (open chain) from a start to an
+end configuration in ``T`` = 3 s. The seed's leg is ``calderon_leg`` (3 DOF: hip yaw + two
+pitch joints, seed 000 Table 1); the study runs on any leg chain of 2–6 revolute joints — a
+serial leg (or arm), or one leg of a legged robot (``leg``), its foot the chain's end frame or
+the frame named by ``foot_frame`` (:mod:`legcore.problems.swing_energy_setup`). Every default is
+seed 000's setting (:mod:`legcore.problems.swing_energy_params`). See ``docs/studies.md (seed
+000)`` for the paper's tables beside ours.
 
 Genes
-    ``x`` (3·K_via,) rad, via-point-major (``x[3 j + i]`` belongs to joint ``i`` at intermediate via
-    point ``j``, K_via = 10); every entry is an integer gene ``k`` times the control resolution
-    (0.00174 rad), and every via point it decodes to is a multiple of the resolution too, as are
-    the start and end configurations — every trajectory is reachable by the controller.
+    ``x`` (n·K_via,) rad for a leg of n joints, via-point-major (``x[n j + i]`` belongs to joint
+    ``i`` at intermediate via point ``j``, K_via = 10); every entry is an integer gene ``k``
+    times the control resolution (0.00174 rad), and every via point it decodes to is a multiple
+    of the resolution too, as are the start and end configurations (unless ``exact_ends``) —
+    every trajectory is reachable by the controller.
     Two encodings (``encoding``):
 
     - ``"deviation"`` (default): the via point is the coordinated motion's via point (on the
@@ -77,7 +82,8 @@ Constraints (G ≤ 0)
     penetration costs 0.3 score points): with Deb's feasibility rule the GA settles on the first
     feasible (hip-pitch) lift and never finds the knee lift the score prefers.
 
-Start and end (derived; the seed gives neither, see the docs for the fit)
+Start and end of seed 000's leg (derived; the seed gives neither, see the docs for the fit;
+the defaults of ``q_start``/``q_end`` for a 3-joint leg)
     start = (−185, 384, −782) steps, end = (186, 384, −780) steps of 0.00174 rad, i.e.
     q_start = (−0.3219, 0.6682, −1.3607) rad, q_end = (0.3236, 0.6682, −1.3572) rad.
     Joint 1 travels 371 steps = 0.6455 rad (Tables 2–5: 0.6458 = 37.0°); joint 3 differs by
@@ -96,23 +102,37 @@ criterion in place of the score (``baseline_generations``, fixed ``baseline_seed
 
 from __future__ import annotations
 
-import math
-from typing import Any, Literal
+import dataclasses
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from legcore.chain_points import chain_points
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import mechanical_energy
 from legcore.joint_metrics import joint_metrics
-from legcore.kinematics import fk, frames, ik, jacobian
-from legcore.problems.study import Box, Motion, Solution, Study, StudyParams, StudyProblem
+from legcore.kinematics import fk, jacobian
+from legcore.problems.study import Box, Motion, Solution, Study, StudyProblem
 from legcore.problems.swing_energy_geometry import (
     chain_clearance,
     point_box_distance,
+    travel_and_peak,
     via_basis,
 )
+from legcore.problems.swing_energy_params import (
+    BASELINES,
+    DEFAULT_END_STEPS,
+    DEFAULT_END_STEPS_OBSTACLE,
+    DEFAULT_START_STEPS,
+    RESOLUTION,
+    BoxSpec,
+    Obstacle,
+    Params,
+)
+from legcore.problems.swing_energy_setup import boxes, configuration, swing_leg
+from legcore.robots.capabilities import Needs
+from legcore.robots.legged import LeggedRobot
 from legcore.robots.model import Robot
 from legcore.trajectories import ViaPointSpline, time_grid
 
@@ -124,6 +144,7 @@ __all__ = [
     "DEFAULT_START_STEPS",
     "RESOLUTION",
     "STUDY",
+    "BoxSpec",
     "Obstacle",
     "Params",
     "SwingEnergyProblem",
@@ -132,197 +153,89 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-#: Seed 000's control resolution (rad) — genes are integer multiples of it.
-RESOLUTION = 0.00174
-#: Derived start/end configurations in resolution steps (see the module docstring); the end of
-#: case 2 (obstacle) keeps joint 3 where it started (Tables 4-5: Solteiro's θ3 = 0).
-DEFAULT_START_STEPS = (-185, 384, -782)
-DEFAULT_END_STEPS = (186, 384, -780)
-DEFAULT_END_STEPS_OBSTACLE = (186, 384, -782)
-
 #: What a problem minimises: the seed's score (as −score) or one literature criterion.
 CRITERIA = ("score", "theta_total", "foot_distance", "multi_criteria", "energy")
-
-#: Baseline name → (criterion it optimises, reference in seed 000).
-BASELINES: dict[str, tuple[str, str]] = {
-    "calderon2008_parabolic": ("parabolic", "Calderón 2008: parabolic swing 0.156 × 0.065 m"),
-    "tian_collins2004_min_displacement": (
-        "theta_total", "Tian & Collins 2004: minimum total angular displacement"),
-    "shankar_kaur2011_min_distance": (
-        "foot_distance", "Shankar & Kaur 2011: shortest foot (end-effector) path"),
-    "solteiro2007_multi_criteria": (
-        "multi_criteria",
-        "Solteiro 2007: displacement + foot distance + foot and joint speeds + energy"),
-    "perez2010_min_energy": ("energy", "Pérez 2010: minimum mechanical energy"),
-}
-BaselineName = Literal[
-    "calderon2008_parabolic",
-    "tian_collins2004_min_displacement",
-    "shankar_kaur2011_min_distance",
-    "solteiro2007_multi_criteria",
-    "perez2010_min_energy",
-]
-Vec3 = tuple[float, float, float]
 
 # Values below these are exact zeros (float noise of the spline basis): rad, rad/s².
 _ZERO_THETA = 1e-12
 _ZERO_ACC = 1e-9
-
-
-class Obstacle(BaseModel):
-    """A box on the ground, mid-stride (seed 000 case 2: 60 × 40 × 26 mm).
-
-    ``length`` along the step, ``width`` across it, ``height`` (m). Its centre lies on the
-    start→end foot chord at the fraction ``along`` (0.5: "halfway between the initial and final
-    points", seed 000 §5.2), shifted ``lateral`` m horizontally to the left of the step
-    direction; its base is on the ground. The box is axis-aligned: its length is laid along the
-    world axis (x or y) nearest the step direction.
-    ``margin`` (m): the links and foot must stay this far out of it (link thickness).
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-    length: float = Field(default=0.060, gt=0.0, le=2.0)
-    width: float = Field(default=0.040, gt=0.0, le=2.0)
-    height: float = Field(default=0.026, gt=0.0, le=2.0)
-    along: float = Field(default=0.5, ge=0.0, le=1.0)
-    lateral: float = Field(default=0.0, ge=-2.0, le=2.0)
-    margin: float = Field(default=0.002, ge=0.0, le=0.5)
-
-
-class Params(StudyParams):
-    """Parameters of the ``swing_energy`` study; defaults are seed 000's settings (units s, rad, m).
-
-    - ``T`` swing time (3 s), ``n_via`` intermediate via points (10), ``dt`` sampling step
-      (0.01 s; T must be a whole number of steps), ``resolution`` control resolution (0.00174).
-    - ``q_start``/``q_end`` (rad) or ``foot_start``/``foot_end`` (m, hip frame; IK branch
-      nearest the default posture) replace the derived start/end; rounded to the grid.
-    - ``w1``, ``w2`` criterion weights (5, 5); ``w_d``, ``w_a`` link weights (0.25, 0.5, 0.25);
-      ``ratio_eps`` ε of the ratios in resolution steps (1; 0 = eqs 2/5 with 0/0 := 1).
-    - ``obstacle``: False (flat ground, case 1), True (the seed's 60 × 40 × 26 mm box
-      mid-stride, case 2) or an :class:`Obstacle`. ``ground``/``ground_tolerance``: keep the
-      leg above the ground (1 mm tolerance).
-    - ``encoding``, ``search_range`` (per joint, rad), ``dead_band`` (× search_range),
-      ``lift_only``: the gene coding (module docstring, "Genes").
-    - ``step_height``: apex of the parabolic baseline (0.065 m). ``baselines``: which baselines
-      to compute (all five); ``baseline_generations``/``baseline_pop_size``/``baseline_seed``:
-      the GA budget and seed of the GA baselines (100 × 100, seed 0).
-    """
-
-    kind: Literal["swing_energy"] = "swing_energy"
-    T: float = Field(default=3.0, gt=0.0, le=60.0, description="swing duration, s")
-    n_via: int = Field(default=10, ge=1, le=40, description="intermediate via points")
-    dt: float = Field(default=0.01, gt=0.0, le=1.0, description="sampling step, s")
-    resolution: float = Field(default=RESOLUTION, gt=0.0, le=0.1, description="rad")
-    q_start: Vec3 | None = None
-    q_end: Vec3 | None = None
-    foot_start: Vec3 | None = None
-    foot_end: Vec3 | None = None
-    w1: float = Field(default=5.0, ge=0.0, le=1e3)
-    w2: float = Field(default=5.0, ge=0.0, le=1e3)
-    w_d: Vec3 = (0.25, 0.5, 0.25)
-    w_a: Vec3 = (0.25, 0.5, 0.25)
-    ratio_eps: float = Field(default=1.0, ge=0.0, le=1e3, description="ε in resolution steps")
-    obstacle: bool | Obstacle = False
-    ground: bool = True
-    ground_tolerance: float = Field(default=0.001, ge=0.0, le=1.0, description="m")
-    encoding: Literal["deviation", "absolute"] = "deviation"
-    search_range: Vec3 = (0.05, 0.3, 0.4)
-    dead_band: float = Field(default=2.0, ge=0.0, le=100.0, description="× search_range")
-    lift_only: bool = True
-    step_height: float = Field(default=0.065, ge=0.0, le=1.0, description="m")
-    baselines: tuple[BaselineName, ...] = (
-        "calderon2008_parabolic",
-        "tian_collins2004_min_displacement",
-        "shankar_kaur2011_min_distance",
-        "solteiro2007_multi_criteria",
-        "perez2010_min_energy",
-    )
-    baseline_generations: int = Field(default=100, ge=1, le=1000)
-    baseline_pop_size: int = Field(default=100, ge=4, le=2000)
-    baseline_seed: int = Field(default=0, ge=0, le=2**32 - 1)
-
-    @model_validator(mode="after")
-    def _consistent(self) -> Params:
-        if any(not math.isfinite(v) or v < 0.0 or v > 2 * math.pi for v in self.search_range):
-            raise ValueError(f"search_range: per-joint ranges must be in [0, 2π] rad, "
-                             f"got {self.search_range}")
-        for name in ("w_d", "w_a"):
-            w = getattr(self, name)
-            if any(not math.isfinite(v) or v < 0.0 for v in w):
-                raise ValueError(f"{name}: link weights must be finite and >= 0, got {w}")
-        if self.w1 + self.w2 <= 0.0:
-            raise ValueError("w1, w2: at least one criterion weight must be > 0")
-        steps = self.T / self.dt
-        if abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
-            raise ValueError(f"dt: T = {self.T} s must be a whole number of steps dt = {self.dt} s")
-        if round(steps) + 1 > 6001:
-            raise ValueError(f"dt: {round(steps) + 1} samples per trajectory, at most 6001")
-        for a, b in (("q_start", "foot_start"), ("q_end", "foot_end")):
-            if getattr(self, a) is not None and getattr(self, b) is not None:
-                raise ValueError(f"{b}: give either {a} or {b}, not both")
-        for name in ("q_start", "q_end", "foot_start", "foot_end"):
-            v = getattr(self, name)
-            if v is not None and not all(math.isfinite(c) for c in v):
-                raise ValueError(f"{name}: values must be finite, got {v}")
-        if len(set(self.baselines)) != len(self.baselines):
-            raise ValueError("baselines: each baseline may be listed once")
-        return self
-
-    @property
-    def box(self) -> Obstacle | None:
-        """The obstacle (None in the flat case)."""
-        if self.obstacle is True:
-            return Obstacle()
-        return self.obstacle or None
-
-
 _BASELINE_CACHE: dict[str, dict[str, Solution]] = {}
 
 
 class SwingEnergyProblem(StudyProblem):
-    """Seed 000 swing-phase problem (see the module docstring).
+    """Seed 000 swing-phase problem on any leg (see the module docstring).
 
     Args:
-        robot: a serial 3-DOF robot (``calderon_leg`` by default).
+        robot: a serial leg of 2–6 revolute joints (``calderon_leg`` by default), or a legged
+            robot whose leg ``params.leg`` swings.
         params: the study :class:`Params`.
         criterion: what F is — ``"score"`` (F = −score, the seed's GA) or a baseline criterion
             ``"theta_total"`` (rad), ``"foot_distance"`` (m), ``"energy"`` (J),
             ``"multi_criteria"`` (dimensionless, see ``swing_energy_baselines``).
         refs: normalisers of the ``multi_criteria`` terms (``swing_energy_baselines``).
 
-    Attributes (all SI): ``q_start``/``q_end`` (3,) rad, ``start_steps``/``end_steps`` (3,) int,
-    ``t`` (K,) s, ``t_via`` (K_via + 2,) s, ``foot_start``/``foot_end`` (3,) m, ``z_ground`` m,
-    ``box`` (Box or None, without margin), ``acc_coordinated`` AcC (3,) rad/s².
+    Attributes (all SI, n joints): ``robot`` the swinging chain; ``n_joints``;
+    ``q_start``/``q_end`` (n,) rad, ``start_steps``/``end_steps`` (n,) int, ``t`` (K,) s,
+    ``t_via`` (K_via + 2,) s, ``foot_start``/``foot_end`` (3,) m (leg base frame), ``z_ground``
+    m, ``boxes`` (the obstacles, without margin) and ``margins`` (m), ``box`` (the first box or
+    None), ``acc_coordinated`` AcC (n,) rad/s².
     """
 
     def __init__(
         self,
-        robot: Robot,
+        robot: Any,
         params: Params,
         criterion: str = "score",
         refs: dict[str, float] | None = None,
     ) -> None:
-        if not isinstance(robot, Robot) or robot.nq != 3:
-            name = getattr(robot, "name", type(robot).__name__)
-            raise ValueError(f"robot: swing_energy needs a serial 3-joint leg, got {name!r}")
+        self.source = robot  # the robot as given (a legged robot, or the serial leg)
+        self.robot_name = str(getattr(robot, "name", ""))
+        #: the leg's hip (4×4, body frame) when it is a leg of a legged robot whose leg frames
+        #: have the body's axes (the scene is then drawn on the body); None otherwise
+        self.hip: NDArray[np.float64] | None = None
+        if isinstance(robot, LeggedRobot) and params.leg in {g.name for g in robot.legs}:
+            hip = np.asarray(robot.leg(str(params.leg)).hip, dtype=float)
+            self.hip = hip if np.allclose(hip[:3, :3], np.eye(3)) else None
+        robot, self.label = swing_leg(robot, params)
+        g = robot.chain.gravity
+        if not np.allclose(g / max(float(np.linalg.norm(g)), 1e-300), [0.0, 0.0, -1.0],
+                           atol=1e-6):
+            raise ValueError(f"robot: swing_energy needs the leg's base frame with z up (gravity "
+                             f"along -z); {self.label} has gravity {g.round(4).tolist()}")
+        n = robot.nq
+        if not 2 <= n <= 6:
+            raise ValueError(f"robot: swing_energy needs a leg of 2–6 joints; {self.label} has {n}")
+        self.n_joints = n
         if criterion not in CRITERIA:
             raise ValueError(f"criterion: unknown {criterion!r}; expected one of {CRITERIA}")
         if criterion == "multi_criteria" and refs is None:
             raise ValueError("refs: the multi_criteria criterion needs its normalisers")
         self.robot = robot
+        # A URDF leg's link frames sit at its joints: its foot is only in the tool frame.
+        frames_ = robot.model.frames
+        tool, last = frames_[robot.tool_frame], frames_[robot.link_frames[-1]]
+        self._foot_is_last_frame = bool(
+            tool.parentJoint == last.parentJoint and tool.placement.isApprox(last.placement, 1e-12)
+        )
         self.params = params
         self.criterion = criterion
         self.refs = dict(refs or {})
         res = float(params.resolution)
         self.res = res
 
-        self.start_steps = self._configuration("start", params.q_start, params.foot_start,
-                                               DEFAULT_START_STEPS)
-        self.end_steps = self._configuration(
-            "end", params.q_end, params.foot_end,
-            DEFAULT_END_STEPS if params.box is None else DEFAULT_END_STEPS_OBSTACLE)
-        self.q_start = self.start_steps * res
-        self.q_end = self.end_steps * res
+        default_start = np.asarray(DEFAULT_START_STEPS, dtype=float) * RESOLUTION
+        ref = default_start if n == 3 and robot.within_limits(default_start) else robot.home
+        exact = params.exact_ends
+        self.q_start, self.start_steps = configuration(
+            robot, "start", params.q_start, params.foot_start, DEFAULT_START_STEPS, ref, res,
+            exact)
+        self.q_end, self.end_steps = configuration(
+            robot, "end", params.q_end, params.foot_end,
+            DEFAULT_END_STEPS if params.box is None else DEFAULT_END_STEPS_OBSTACLE,
+            self.q_start, res, exact)
+        self.w_d = np.asarray(params.per_joint("w_d", n), dtype=float)
+        self.w_a = np.asarray(params.per_joint("w_a", n), dtype=float)
+        search_range = np.asarray(params.per_joint("search_range", n), dtype=float)
 
         self.n_via = int(params.n_via)
         self.t = time_grid(params.T, params.dt)
@@ -334,81 +247,48 @@ class SwingEnergyProblem(StudyProblem):
         # point, characterised like every candidate (its via points on the grid, same spline).
         ends = np.stack([self.q_start, self.q_end])[None]
         coord = ViaPointSpline(np.array([0.0, params.T]), ends)
-        self.q_coordinated_via = coord.evaluate(self.t_via[1:-1]).q[0]  # (n_via, 3)
-        self.coord_steps = np.rint(self.q_coordinated_via / res).astype(np.int64)  # (n_via, 3)
+        self.q_coordinated_via = coord.evaluate(self.t_via[1:-1]).q[0]  # (n_via, n)
+        self.coord_steps = np.rint(self.q_coordinated_via / res).astype(np.int64)  # (n_via, n)
         self.theta_min = np.abs(self.q_end - self.q_start)
 
         feet = fk(robot, np.stack([self.q_start, self.q_end]))[:, :3, 3]
         self.foot_start, self.foot_end = feet[0].copy(), feet[1].copy()
-        self.z_ground = float(min(feet[0, 2], feet[1, 2]))
-        self.box, self.margin = self._make_box(params.box)
+        z_feet = float(min(feet[0, 2], feet[1, 2]))
+        if params.ground_height is None:
+            self.z_ground = z_feet
+        elif params.ground and z_feet < params.ground_height - params.ground_tolerance:
+            raise ValueError(f"ground_height: {params.ground_height} m is above the start or "
+                             f"end foot (z = {z_feet:.4g} m)")
+        else:
+            self.z_ground = float(params.ground_height)
+        self.boxes, self.margins = boxes(params.box, params.obstacles, self.foot_start,
+                                         self.foot_end, self.z_ground)
+        self.box = self.boxes[0] if self.boxes else None
+        self.margin = self.margins[0] if self.margins else 0.0
 
         self.eps_d = params.ratio_eps * res
         self.eps_a = params.ratio_eps * 6.0 * res / params.T**2
-        self.w_d = np.asarray(params.w_d, dtype=float)
-        self.w_a = np.asarray(params.w_a, dtype=float)
 
         # Search space (see the module docstring, "Genes").
         self.lift_sign = self._lift_signs()
-        self.range_steps = np.rint(np.asarray(params.search_range) / res).astype(np.int64)
+        self.range_steps = np.rint(search_range / res).astype(np.int64)
         self.dead_steps = np.rint(params.dead_band * self.range_steps).astype(np.int64)
         self.steps_min = np.ceil(robot.q_min / res - 1e-9).astype(np.int64)
         self.steps_max = np.floor(robot.q_max / res + 1e-9).astype(np.int64)
         lo, hi = self._gene_box()
-        n_constr = int(params.ground) + int(self.box is not None)
+        n_constr = int(params.ground) + int(bool(self.boxes))
         self.constraint_names = tuple(
-            n for n, on in (("ground", params.ground), ("obstacle", self.box is not None)) if on
+            c for c, on in (("ground", params.ground), ("obstacle", bool(self.boxes))) if on
         )
         names = {"score": ("neg_score",)}
         self.objective_names = names.get(criterion, (criterion,))
-        super().__init__(3 * self.n_via, 1, n_constr, xl=lo.ravel() * res, xu=hi.ravel() * res,
+        super().__init__(n * self.n_via, 1, n_constr, xl=lo.ravel() * res, xu=hi.ravel() * res,
                          resolution=res, name=f"swing_energy[{criterion}]")
         (qdd_c,) = self.trajectories(self.coordinated_x()[None], (2,))
         self.acc_coordinated = np.max(np.abs(qdd_c[0]), axis=0)
-
-    # ------------------------------------------------------------------ set-up helpers
-    def _configuration(
-        self, which: str, q: Vec3 | None, foot: Vec3 | None, default: tuple[int, int, int]
-    ) -> NDArray[np.int64]:
-        """Start/end configuration in integer resolution steps (validated against the limits)."""
-        robot, res = self.robot, self.res
-        if foot is not None:
-            home = np.asarray(DEFAULT_START_STEPS, dtype=float) * RESOLUTION
-            sol = ik(robot, np.asarray(foot, dtype=float), q_ref=home)
-            if not bool(sol.ok):
-                raise ValueError(f"foot_{which}: {list(foot)} m is not reachable by "
-                                 f"{robot.name!r} within its joint limits")
-            q = (float(sol.q[0]), float(sol.q[1]), float(sol.q[2]))
-        if q is None:
-            steps = np.asarray(default, dtype=np.int64)
-        else:
-            steps = np.rint(np.asarray(q, dtype=float) / res).astype(np.int64)
-        qq = steps * res
-        if np.any(qq < robot.q_min - 1e-12) or np.any(qq > robot.q_max + 1e-12):
-            field = f"q_{which}" if foot is None else f"foot_{which}"
-            raise ValueError(f"{field}: configuration {qq.round(4).tolist()} rad is outside the "
-                             f"joint limits of {robot.name!r}")
-        return steps
-
-    def _make_box(self, ob: Obstacle | None) -> tuple[Box | None, float]:
-        """The obstacle box (no margin) and its margin (m); see :class:`Obstacle`."""
-        if ob is None:
-            return None, 0.0
-        chord = self.foot_end - self.foot_start
-        heading = np.array([chord[0], chord[1], 0.0])
-        n = float(np.linalg.norm(heading))
-        if n < 1e-9:
-            raise ValueError("obstacle: start and end feet coincide in the horizontal plane; "
-                             "'mid-stride' is undefined")
-        heading /= n
-        left = np.array([-heading[1], heading[0], 0.0])
-        c = self.foot_start + ob.along * chord + ob.lateral * left
-        c[2] = self.z_ground + 0.5 * ob.height
-        along_x = abs(heading[0]) >= abs(heading[1])
-        half = (ob.length / 2, ob.width / 2) if along_x else (ob.width / 2, ob.length / 2)
-        box = Box(center=(float(c[0]), float(c[1]), float(c[2])),
-                  half_size=(float(half[0]), float(half[1]), ob.height / 2))
-        return box, float(ob.margin)
+        # load the evaluation's numba kernels now: the first evaluate() is measured by
+        # legcore.memory (tracemalloc) and must see arrays, not numba's cache loader
+        self._evaluate(self.coordinated_x()[None])
 
     # ------------------------------------------------------------------ trajectories
     def _lift_signs(self) -> NDArray[np.int64]:
@@ -418,11 +298,12 @@ class SwingEnergyProblem(StudyProblem):
         return np.where(np.abs(dz) > 1e-3, np.sign(dz), 0.0).astype(np.int64)
 
     def _gene_box(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """Integer gene bounds (n_via, 3) of the chosen encoding."""
+        """Integer gene bounds (n_via, n) of the chosen encoding."""
         p = self.params
-        W = np.broadcast_to(self.range_steps, (self.n_via, 3))
-        one_sided = np.broadcast_to((self.lift_sign != 0) & p.lift_only, (self.n_via, 3))
-        sgn = np.broadcast_to(np.where(self.lift_sign == 0, 1, self.lift_sign), (self.n_via, 3))
+        shape = (self.n_via, self.n_joints)
+        W = np.broadcast_to(self.range_steps, shape)
+        one_sided = np.broadcast_to((self.lift_sign != 0) & p.lift_only, shape)
+        sgn = np.broadcast_to(np.where(self.lift_sign == 0, 1, self.lift_sign), shape)
         if p.encoding == "absolute":
             c = self.coord_steps
             lo = np.where(one_sided & (sgn > 0), c, c - W)
@@ -430,18 +311,25 @@ class SwingEnergyProblem(StudyProblem):
             lo = np.clip(lo, self.steps_min, self.steps_max)
             hi = np.clip(hi, self.steps_min, self.steps_max)
             return lo, np.maximum(hi, lo)
-        reach = np.broadcast_to(self.dead_steps, (self.n_via, 3)) + W
+        reach = np.broadcast_to(self.dead_steps, shape) + W
         lo = np.where(one_sided & (sgn > 0), 0, -reach)
         hi = np.where(one_sided & (sgn < 0), 0, reach)
         return lo, hi
 
+    def free_start(self) -> tuple[str, FloatArray] | None:
+        """``deviation`` coding: all-zero genes decode to the coordinated motion, a solution the
+        coding gives without search (random genes fall in its dead band with probability ⅔)."""
+        if self.params.encoding == "absolute":
+            return None
+        return "the coordinated motion (all genes 0)", np.zeros(self.n_var)
+
     def via_steps(self, X: FloatArray) -> NDArray[np.int64]:
-        """Intermediate via points (B, n_via, 3) in resolution steps of decision vectors X.
+        """Intermediate via points (B, n_via, n) in resolution steps of decision vectors X.
 
         ``absolute``: the gene itself. ``deviation``: the coordinated via point plus the gene's
         excess over the dead band, ``sign(g) · max(|g| − D, 0)``; clipped to the joint limits.
         """
-        G = np.rint(np.asarray(X, dtype=float).reshape(-1, self.n_via, 3) / self.res)
+        G = np.rint(np.asarray(X, dtype=float).reshape(-1, self.n_via, self.n_joints) / self.res)
         G = G.astype(np.int64)
         if self.params.encoding == "absolute":
             V = G
@@ -450,9 +338,9 @@ class SwingEnergyProblem(StudyProblem):
         return np.clip(V, self.steps_min, self.steps_max)
 
     def encode(self, via: FloatArray) -> FloatArray:
-        """Decision vector (3 n_via,) rad whose via points are ``via`` (n_via, 3) rad (rounded
+        """Decision vector (n n_via,) rad whose via points are ``via`` (n_via, n) rad (rounded
         to the grid); the inverse of :meth:`via_steps` (may lie outside the GA's bounds)."""
-        V = np.rint(np.asarray(via, dtype=float).reshape(self.n_via, 3) / self.res)
+        V = np.rint(np.asarray(via, dtype=float).reshape(self.n_via, self.n_joints) / self.res)
         V = V.astype(np.int64)
         if self.params.encoding == "absolute":
             G = V
@@ -462,22 +350,33 @@ class SwingEnergyProblem(StudyProblem):
         return (G * self.res).ravel()
 
     def via_points(self, X: FloatArray) -> FloatArray:
-        """All J = K_via + 2 via points (B, J, 3) rad of decision vectors ``X`` (B, 3 K_via)."""
-        V = self.via_steps(X) * self.res
+        """All J = K_via + 2 via points (B, J, n) rad of decision vectors ``X`` (B, n K_via)."""
+        return self.with_ends(self.via_steps(X) * self.res)
+
+    def with_ends(self, V: np.ndarray) -> FloatArray:
+        """Intermediate via points V (B, K_via, n) rad → all J = K_via + 2 (start and end added).
+        """
         B = V.shape[0]
         return np.concatenate(
-            [np.broadcast_to(self.q_start, (B, 1, 3)), V, np.broadcast_to(self.q_end, (B, 1, 3))],
+            [np.broadcast_to(self.q_start, (B, 1, self.n_joints)), V,
+             np.broadcast_to(self.q_end, (B, 1, self.n_joints))],
             axis=1,
         )
 
     def trajectories(
         self, X: FloatArray, orders: tuple[int, ...] = (0, 1, 2, 3)
     ) -> list[FloatArray]:
-        """Sampled q, q̇, q̈, jerk (the derivative ``orders`` asked for), each (B, K, 3).
+        """Sampled q, q̇, q̈, jerk (the derivative ``orders`` asked for), each (B, K, n).
 
         Relative to the start (``q_start + N·(V − q_start)``) so that a joint whose via points
         all equal its start value is exactly constant (no float noise)."""
-        V = self.via_points(X) - self.q_start
+        return self.via_trajectories(self.via_points(X), orders)
+
+    def via_trajectories(
+        self, V: FloatArray, orders: tuple[int, ...] = (0, 1, 2, 3)
+    ) -> list[FloatArray]:
+        """As :meth:`trajectories`, from all J via points V (B, J, n) rad (on the grid or not)."""
+        V = V - self.q_start
         out = []
         for d in orders:
             y = self._N[d] @ V
@@ -485,16 +384,15 @@ class SwingEnergyProblem(StudyProblem):
         return out
 
     def genes(self, x: FloatArray) -> NDArray[np.int64]:
-        """Integer genes (n_via, 3) of a decision vector (x / resolution, rounded)."""
-        x = np.asarray(x, dtype=float).reshape(self.n_via, 3)
+        """Integer genes (n_via, n) of a decision vector (x / resolution, rounded)."""
+        x = np.asarray(x, dtype=float).reshape(self.n_via, self.n_joints)
         return np.rint(x / self.res).astype(np.int64)
 
     # ------------------------------------------------------------------ criteria
     def score_parts(self, q: FloatArray, qdd: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """(f_d, f_a) per trajectory (B,) from q, q̈ (B, K, 3) — seed eqs 2–5 (module docstring)."""
-        theta = np.sum(np.abs(np.diff(q, axis=-2)), axis=-2)
+        """(f_d, f_a) per trajectory (B,) from q, q̈ (B, K, n) — seed eqs 2–5 (module docstring)."""
+        theta, acc = travel_and_peak(q, qdd)  # Σ_k |Δq|, max_k |q̈| (one numba pass)
         theta = np.where(theta < _ZERO_THETA, 0.0, theta)
-        acc = np.max(np.abs(qdd), axis=-2)
         acc = np.where(acc < _ZERO_ACC, 0.0, acc)
         r_d = _ratio(self.theta_min, theta, self.eps_d)
         r_a = _ratio(self.acc_coordinated, acc, self.eps_a)
@@ -511,13 +409,19 @@ class SwingEnergyProblem(StudyProblem):
         return mechanical_energy(qd, tau, self.t).total
 
     def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        return self.evaluate_via(self.via_points(X))
+
+    def evaluate_via(self, V: FloatArray) -> tuple[FloatArray, FloatArray | None]:
+        """(F (B, 1), G (B, n_constr) or None) of the trajectories through all J via points
+        V (B, J, n) rad — the continuous decode (off-grid via points allowed) behind
+        ``_evaluate``, which passes the via points of integer genes."""
         c = self.criterion
         need_pts = self.n_constr > 0 or c in ("foot_distance", "multi_criteria")
         if c in ("energy", "multi_criteria"):
-            q, qd, qdd = self.trajectories(X, (0, 1, 2))
+            q, qd, qdd = self.via_trajectories(V, (0, 1, 2))
         else:
-            q, qdd = self.trajectories(X, (0, 2))
-        P = frames(self.robot, q)[..., :3, 3] if need_pts else None  # (B, K, 4, 3)
+            q, qdd = self.via_trajectories(V, (0, 2))
+        P = self.chain_points(q) if need_pts else None  # (B, K, M, 3)
         if c == "score":
             F = -self.score(q, qdd)
         elif c == "theta_total":
@@ -540,16 +444,28 @@ class SwingEnergyProblem(StudyProblem):
         G = self._constraints(P) if self.n_constr else None
         return F[:, None], G
 
+    def chain_points(self, q: FloatArray) -> FloatArray:
+        """Points along the leg (..., M, 3), m, for configurations ``q`` (..., n): the base and
+        link-frame origins, then the foot (the robot's tool frame) unless the last link frame
+        is already the foot (a standard-DH leg). The foot is always ``[..., -1, :]``.
+        Positions only (no 4×4 poses), C-contiguous: :func:`legcore.chain_points.chain_points`."""
+        return chain_points(self.robot, q, tool=not self._foot_is_last_frame)
+
     def _constraints(self, P: FloatArray | None) -> FloatArray:
-        """G (B, n_constr) from joint origins P (B, K, 4, 3): ground depth, box penetration (m)."""
+        """G (B, n_constr) from the chain points P (B, K, M, 3): ground depth, box penetration
+        (m)."""
         assert P is not None
-        box = self.box
-        half = None if box is None else np.asarray(box.half_size) + self.margin
-        depth, z_min = chain_clearance(P, None if box is None else box.center, half)
+        if self.boxes:  # all boxes, grown by their margins, in one pass over P
+            centers = np.array([box.center for box in self.boxes], dtype=float)
+            halves = np.array([np.asarray(box.half_size) + margin
+                               for box, margin in zip(self.boxes, self.margins, strict=True)])
+            depth, z_min = chain_clearance(P, centers, halves)
+        else:
+            depth, z_min = chain_clearance(P)
         cols = []
         if self.params.ground:
             cols.append(self.z_ground - self.params.ground_tolerance - z_min)
-        if box is not None:
+        if self.boxes:
             cols.append(depth)
         return np.stack(cols, axis=1)
 
@@ -558,8 +474,8 @@ class SwingEnergyProblem(StudyProblem):
         """The full decoded trajectory of ``x`` with the seed's Table 2/3 metrics.
 
         ``objectives``: {"score"}; ``metrics``: score, f_d, f_a, θ_T, D, E, ∫τ²dt, clearances
-        (m; ``obstacle_clearance`` is the least distance of any link segment to the box, ≥
-        ``margin`` when feasible), constraint values, ``feasible`` (1/0), ``on_grid`` (1 when
+        (m; ``obstacle_clearance`` is the least distance of any link segment to the boxes, ≥
+        their ``margin`` when feasible), constraint values, ``feasible`` (1/0), ``on_grid`` (1 when
         every value is a multiple of the resolution), and ``criterion`` (this problem's F).
         """
         x = np.asarray(x, dtype=float)
@@ -567,7 +483,7 @@ class SwingEnergyProblem(StudyProblem):
             raise ValueError(f"x: expected shape ({self.n_var},), got {x.shape}")
         q, qd, qdd, jerk = (a[0] for a in self.trajectories(x[None]))
         tau = inverse_dynamics(self.robot, q, qd, qdd)
-        P = frames(self.robot, q)[..., :3, 3]  # (K, 4, 3)
+        P = self.chain_points(q)  # (K, M, 3)
         foot = P[:, -1]
         jm = joint_metrics(self.t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=foot)
         f_d, f_a = (float(v[0]) for v in self.score_parts(q[None], qdd[None]))
@@ -601,15 +517,16 @@ class SwingEnergyProblem(StudyProblem):
             "targets": np.stack([self.foot_start, self.foot_end]),
             "ground_z": self.z_ground,
         }
-        if self.box is not None:
+        if self.boxes:
             metrics["obstacle_clearance"] = self._clearance(P)
-            scene["obstacles"] = [self.box]
+            scene["obstacles"] = list(self.boxes)
             scene["obstacle_margin"] = self.margin
         motion = Motion(
             t=self.t.copy(), q=q, qd=qd, qdd=qdd, jerk=jerk, tau=tau, power=power, energy=energy,
-            tool=foot, joint_names=_joint_names(self.robot),
-            robot=self.robot.name, scene=scene,
+            tool=foot, joint_names=_joint_names(self.robot), robot=self.label, scene=scene,
         )
+        if self.hip is not None:  # one leg of a legged robot: draw it on the body, at its hip
+            motion = _on_body(motion, self.hip, self.robot_name, str(self.params.leg))
         table = [
             {"metric": r.label, "key": r.key, "unit": r.unit,
              **({"values": list(r.per_joint)} if r.per_joint is not None else {"total": r.total})}
@@ -632,13 +549,33 @@ class SwingEnergyProblem(StudyProblem):
                         motion=motion, extra=extra)
 
     def _clearance(self, P: FloatArray, per_segment: int = 60) -> float:
-        """Least distance (m) of the sampled link segments P (K, 4, 3) to the box (no margin)."""
-        assert self.box is not None
+        """Least distance (m) of the sampled link segments P (K, M, 3) to the boxes (no
+        margin)."""
         lam = np.linspace(0.0, 1.0, per_segment)[:, None]
         a, b = P[:, :-1, None, :], P[:, 1:, None, :]
-        pts = a + lam * (b - a)  # (K, 3, per_segment, 3)
-        d = point_box_distance(pts, self.box.center, self.box.half_size)
-        return float(d.min())
+        pts = a + lam * (b - a)  # (K, M - 1, per_segment, 3)
+        return min(float(point_box_distance(pts, box.center, box.half_size).min())
+                   for box in self.boxes)
+
+    def relaxation(self) -> Any:
+        """Continuous relaxation for :func:`legcore.optimizers.refine.refine`: z = the
+        intermediate via points (n_via·n,) rad, anywhere in the search tube the genes reach
+        (bounds: the via points of the gene bounds), evaluated off the grid by
+        :meth:`evaluate_via`; ``lower`` rounds them back onto the grid (:meth:`encode`)."""
+        from legcore.optimizers.refine import Relaxation
+
+        shape = (-1, self.n_via, self.n_joints)
+
+        def evaluate(Z: FloatArray) -> tuple[FloatArray, FloatArray]:
+            F, G = self.evaluate_via(self.with_ends(np.asarray(Z, dtype=float).reshape(shape)))
+            return self.check_output(F.shape[0], F, G)
+
+        def lift(x: FloatArray) -> FloatArray:
+            return np.asarray(self.via_steps(np.asarray(x)[None]) * self.res, dtype=float).ravel()
+
+        return Relaxation(xl=lift(self.xl), xu=lift(self.xu), evaluate=evaluate, lift=lift,
+                          lower=lambda z: self.snap(self.encode(z)[None])[0],
+                          step=np.full(self.n_var, self.res))
 
     def coordinated_x(self) -> FloatArray:
         """Decision vector of the coordinated start→end motion (its via points on the grid)."""
@@ -652,7 +589,8 @@ class SwingEnergyProblem(StudyProblem):
         are computed once per process for each (robot, params): a sweep over seeds or optimiser
         settings reuses them.
         """
-        key = self.robot.spec.model_dump_json() + self.params.model_dump_json()
+        key = (self.robot.spec.model_dump_json() + str(self.robot.tool_frame)
+               + self.params.model_dump_json())
         cached = _BASELINE_CACHE.get(key)
         if cached is None:
             from legcore.problems.swing_energy_baselines import compute_baselines
@@ -685,6 +623,9 @@ class SwingEnergyProblem(StudyProblem):
             "obstacle": None if self.box is None else {
                 "center": list(self.box.center), "half_size": list(self.box.half_size),
                 "margin": self.margin},
+            "obstacles": [{"center": list(b.center), "half_size": list(b.half_size),
+                           "margin": m} for b, m in zip(self.boxes, self.margins, strict=True)],
+            "leg": self.label,
             "energy_best": best_E,
             "energy_baselines": energies,
         }
@@ -703,13 +644,30 @@ def _ratio(num: FloatArray, den: FloatArray, eps: float) -> FloatArray:
     return np.minimum(r, 1.0)
 
 
+def _on_body(motion: Motion, hip: FloatArray, robot: str, leg: str) -> Motion:
+    """``motion`` of one leg moved from its hip frame to the body frame (hip with the body's
+    axes: a translation), named after the whole robot and that leg (for drawing it)."""
+    d = hip[:3, 3]
+    scene = dict(motion.scene)
+    scene["targets"] = np.asarray(scene["targets"]) + d
+    scene["ground_z"] = float(scene["ground_z"] + d[2])
+    if "obstacles" in scene:
+        scene["obstacles"] = [
+            Box(center=(b.center[0] + d[0], b.center[1] + d[1], b.center[2] + d[2]),
+                half_size=b.half_size) for b in scene["obstacles"]]
+    scene["frame"] = f"body frame of {robot} (leg {leg}: its hip at {d.round(4).tolist()} m)"
+    return dataclasses.replace(motion, tool=None if motion.tool is None else motion.tool + d,
+                               robot=robot, legs=(leg,), scene=scene)
+
+
 def _joint_names(robot: Robot) -> tuple[str, ...]:
     names = [robot.model.names[i] for i in range(1, robot.model.njoints)]
     return tuple(names) if len(names) == robot.nq else tuple(f"q{i + 1}" for i in range(robot.nq))
 
 
 def build(robot: Any, params: Any) -> SwingEnergyProblem:
-    """The study's problem for ``robot`` (a 3-joint serial leg) and ``params`` (:class:`Params`)."""
+    """The study's problem for ``robot`` (a serial leg, or a legged robot with ``params.leg``)
+    and ``params`` (:class:`Params`)."""
     if not isinstance(params, Params):
         params = Params.model_validate(params)
     return SwingEnergyProblem(robot, params)
@@ -717,7 +675,7 @@ def build(robot: Any, params: Any) -> SwingEnergyProblem:
 
 STUDY = Study(
     kind="swing_energy",
-    title="Energy-optimal swing (transfer) phase of a walking-robot leg (seed 000)",
+    title="Energy-optimal swing (transfer) phase of a leg (seed 000)",
     seed_paper="000",
     params=Params,
     default_robot="calderon_leg",
@@ -728,5 +686,16 @@ STUDY = Study(
     },
     default_generations=100,
     build=build,
-    robot_kinds=("serial",),
+    robot_kinds=("serial", "legged"),
+    needs=(
+        Needs(serial=True, min_joints=2, max_joints=6, revolute=True),
+        Needs(legged=True, leg_joints=(2, 6), revolute=True),
+    ),
+    description=(
+        "One leg (a serial chain of 2-6 revolute joints, or one leg of a legged robot: "
+        "problem.leg) swings from a start to an end foot position or configuration through "
+        "joint via points on a control grid; the GA maximises seed 000's coordination score "
+        "(or a baseline's criterion) with the foot and links above the ground and clear of "
+        "box obstacles. Reports the mechanical energy and seed 000's per-joint table."
+    ),
 )

@@ -8,13 +8,14 @@ Constructions (deterministic, exact for their criterion up to the via-point char
 
 - ``calderon2008_parabolic``: the foot follows a parabola in the vertical plane of the
   start→end chord, apex ``step_height`` (0.065 m) above it at mid-stride,
-  ``p(s) = p_s + (p_e − p_s) s + ẑ 4 h s (1 − s)``; via point j is the IK (branch nearest the
-  start posture) of ``p(j/(K_via + 1))``, rounded to the grid.
+  ``p(s) = p_s + (p_e − p_s) s + ẑ 4 h s (1 − s)``; via point j is the IK of
+  ``p(j/(K_via + 1))`` (:func:`legcore.ik.solve` along the path from the start posture: the
+  closed form where the leg has one, else numerical), rounded to the grid.
 - ``shankar_kaur2011_min_distance``: the shortest foot path — the straight chord on flat
-  ground; with the box, the taut string over it in the chord's vertical plane (start → the box's
-  near top edge → far top edge → end, the box grown by its margin). Via points at equal
-  path-length fractions, IK, grid. If the spline between via points dips into the ground or the
-  box, the path is raised 1 mm at a time until it clears (at most 50 mm).
+  ground; with boxes, the taut string over them in the chord's vertical plane (start → each
+  crossed box's near top edge → far top edge → end, the boxes grown by their margins). Via
+  points at equal path-length fractions, IK, grid. If the spline between via points dips into
+  the ground or a box, the path is raised 1 mm at a time until it clears (at most 50 mm).
 
 GA baselines (the study's GA with the literature's criterion instead of the score; same
 encoding, constraints and operators; ``baseline_pop_size`` × ``baseline_generations`` with the
@@ -31,14 +32,16 @@ fixed seed ``baseline_seed``; Deb's feasibility rule):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from legcore.kinematics import fk, ik
+from legcore.ik import solve
+from legcore.kinematics import fk
 from legcore.optimizers import MaxGenerations, get_algorithm, minimize
 from legcore.problems.study import Solution
+from legcore.result_cache import cached, code_version, content_key
 
 if TYPE_CHECKING:
     from legcore.problems.swing_energy import SwingEnergyProblem
@@ -46,6 +49,7 @@ if TYPE_CHECKING:
 __all__ = [
     "MULTI_TERMS",
     "compute_baselines",
+    "ga_baseline_problems",
     "min_distance_via",
     "multi_criteria",
     "parabolic_via",
@@ -82,15 +86,16 @@ def multi_criteria(
 
 
 def _ik_via(problem: SwingEnergyProblem, p: FloatArray) -> FloatArray | None:
-    """Via points (n_via, 3) rad on the grid for foot targets p (n_via, 3); None if any fails."""
-    sol = ik(problem.robot, p, q_ref=problem.q_start)
-    if not np.all(sol.ok):
+    """Via points (n_via, n) rad on the grid for foot targets p (n_via, 3); None if any fails."""
+    sol = solve(problem.robot, p, "position", q0=problem.q_start, rest=problem.q_start,
+                path=True)
+    if not np.all(sol.reachable):
         return None
     return np.rint(sol.q / problem.res) * problem.res
 
 
 def parabolic_via(problem: SwingEnergyProblem, height: float | None = None) -> FloatArray | None:
-    """Via points (n_via, 3) rad of the parabolic swing (module docstring), None if the IK fails."""
+    """Via points (n_via, n) rad of the parabolic swing (module docstring), None if the IK fails."""
     h = problem.params.step_height if height is None else float(height)
     s = np.arange(1, problem.n_via + 1) / (problem.n_via + 1)
     p = (problem.foot_start + np.outer(s, problem.foot_end - problem.foot_start)
@@ -119,10 +124,11 @@ def _taut_path(problem: SwingEnergyProblem, grow: float, lift: float) -> FloatAr
     chord = pe - ps
     L = float(np.hypot(chord[0], chord[1]))
     pts = [(0.0, float(ps[2])), (1.0, float(pe[2]))]
-    box = problem.box
-    if box is not None and L > 0.0:
+    for box, margin in zip(problem.boxes, problem.margins, strict=True):
+        if L <= 0.0:
+            break
         c = np.asarray(box.center)
-        h = np.asarray(box.half_size) + problem.margin + grow
+        h = np.asarray(box.half_size) + margin + grow
         s_in, s_out = 0.0, 1.0
         hit = True
         for ax in range(2):  # where the chord's horizontal projection crosses the footprint
@@ -149,7 +155,7 @@ def _taut_path(problem: SwingEnergyProblem, grow: float, lift: float) -> FloatAr
 
 
 def min_distance_via(problem: SwingEnergyProblem) -> FloatArray | None:
-    """Via points (n_via, 3) rad of the shortest foot path that the decoded trajectory keeps
+    """Via points (n_via, n) rad of the shortest foot path that the decoded trajectory keeps
     feasible (module docstring); None if no such path is found."""
     grow = lift = 0.0
     for _ in range(_RAISE_MAX + 1):
@@ -187,14 +193,43 @@ def _ga_baseline(problem: SwingEnergyProblem, criterion: str, refs: dict[str, fl
     from legcore.problems.swing_energy import SwingEnergyProblem
 
     p = problem.params
-    sub = SwingEnergyProblem(problem.robot, p, criterion=criterion, refs=refs)
-    algo = get_algorithm("ga", pop_size=p.baseline_pop_size, mutation_rate=0.03, elitism=2)
-    res = minimize(sub, algo, MaxGenerations(p.baseline_generations), seed=p.baseline_seed)
-    sol = sub.solution(np.asarray(res.x), label=label)
+    sub = SwingEnergyProblem(problem.source, p, criterion=criterion, refs=refs)
+
+    def optimise() -> dict[str, Any]:
+        algo = get_algorithm("ga", pop_size=p.baseline_pop_size, mutation_rate=0.03, elitism=2)
+        res = minimize(sub, algo, MaxGenerations(p.baseline_generations), seed=p.baseline_seed)
+        return {"x": [float(v) for v in res.x], "n_evals": int(res.n_evals)}
+
+    found = cached(_ga_key(problem, criterion, refs), optimise)
+    sol = sub.solution(np.asarray(found["x"], dtype=float), label=label)
     sol.extra["optimizer"] = {"kind": "ga", "pop_size": p.baseline_pop_size,
                               "generations": p.baseline_generations, "seed": p.baseline_seed,
-                              "penalty": None, "n_evals": res.n_evals}
+                              "penalty": None, "n_evals": found["n_evals"]}
     return sol
+
+
+def _ga_key(problem: SwingEnergyProblem, criterion: str, refs: dict[str, float]) -> str:
+    """Content hash of a GA baseline: robot, tool frame, study parameters, criterion,
+    normalisers, numpy version and legcore's code (``legcore.result_cache``: the optimum is
+    reused across processes when ``LEGOPT_CACHE_DIR`` is set)."""
+    robot = problem.robot
+    return content_key("swing_energy_ga_baseline", [
+        robot.spec.model_dump_json(), str(robot.tool_frame), problem.params.model_dump_json(),
+        criterion, {k: float(v) for k, v in sorted(refs.items())}, np.__version__,
+        code_version(),
+    ])
+
+
+def ga_baseline_problems(problem: SwingEnergyProblem) -> list[SwingEnergyProblem]:
+    """The problems of the GA baselines ``problem.params.baselines`` asks for, with placeholder
+    ``multi_criteria`` normalisers (same arrays as the real ones: for sizing their memory)."""
+    from legcore.problems.swing_energy import BASELINES, SwingEnergyProblem
+
+    criteria = {BASELINES[name][0] for name in problem.params.baselines}
+    criteria -= {"parabolic", "foot_distance"}
+    refs = dict.fromkeys(MULTI_TERMS, 1.0)
+    return [SwingEnergyProblem(problem.source, problem.params, criterion=c, refs=refs)
+            for c in sorted(criteria)]
 
 
 def compute_baselines(problem: SwingEnergyProblem) -> dict[str, Solution]:

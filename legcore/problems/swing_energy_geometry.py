@@ -9,7 +9,10 @@
 - :func:`point_box_distance` — signed distance of points to a box (negative inside), used to
   report the clearance of a decoded trajectory.
 - :func:`chain_clearance` — the same slab test compiled with numba over a whole batch of
-  sampled chains (the GA's constraint evaluation), plus the lowest joint height.
+  sampled chains and all boxes in one pass (the GA's constraint evaluation), plus the lowest
+  joint height.
+- :func:`travel_and_peak` — per-joint travel Σ|Δq| and peak |q̈| of a batch in one pass (the
+  score's reductions over the time axis).
 
 Shapes: points ``(..., 3)`` m; boxes are axis-aligned, ``center`` (3,) and ``half`` (3,) m.
 """
@@ -22,7 +25,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from legcore.trajectories import ViaPointSpline
 
-__all__ = ["chain_clearance", "point_box_distance", "segment_box_depth", "via_basis"]
+__all__ = [
+    "chain_clearance",
+    "point_box_distance",
+    "segment_box_depth",
+    "travel_and_peak",
+    "via_basis",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -82,7 +91,7 @@ def point_box_distance(p: ArrayLike, center: ArrayLike, half: ArrayLike) -> Floa
     return outside + inside
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _segment_depth(a: FloatArray, b: FloatArray, c: FloatArray, h: FloatArray) -> float:
     """:func:`segment_box_depth` of one segment (slab method; 0 when it misses the box)."""
     lam_in, lam_out = 0.0, 1.0
@@ -110,18 +119,32 @@ def _segment_depth(a: FloatArray, b: FloatArray, c: FloatArray, h: FloatArray) -
     return max(depth, 0.0)
 
 
-@numba.njit(cache=True)
-def _chain_kernel(P: FloatArray, c: FloatArray, h: FloatArray, use_box: bool,
-                  depth: FloatArray, zmin: FloatArray) -> None:
+@numba.njit(cache=True, nogil=True)
+def _chain_kernel(P: FloatArray, c: FloatArray, h: FloatArray,
+                  depth: FloatArray, zmin: FloatArray) -> None:  # pragma: no cover - compiled
+    """depth (B,): max segment depth over the boxes c/h (nb, 3); zmin (B,): lowest point z."""
     B, K, M, _ = P.shape
+    nb = c.shape[0]
+    lo = c - h
+    hi = c + h
     for b in range(B):
         dmax = 0.0
         z = np.inf
         for k in range(K):
+            Pk = P[b, k]
             for m in range(1, M):
-                z = min(z, P[b, k, m, 2])
-                if use_box:
-                    dmax = max(dmax, _segment_depth(P[b, k, m - 1], P[b, k, m], c, h))
+                z = min(z, Pk[m, 2])
+                for j in range(nb):
+                    # bounding boxes apart on an axis: the slab test gives 0 too (exactly)
+                    miss = False
+                    for ax in range(3):
+                        u = Pk[m - 1, ax]
+                        v = Pk[m, ax]
+                        if (u < lo[j, ax] and v < lo[j, ax]) or (u > hi[j, ax] and v > hi[j, ax]):
+                            miss = True
+                            break
+                    if not miss:
+                        dmax = max(dmax, _segment_depth(Pk[m - 1], Pk[m], c[j], h[j]))
         depth[b] = dmax
         zmin[b] = z
 
@@ -131,19 +154,59 @@ def chain_clearance(
 ) -> tuple[FloatArray, FloatArray]:
     """Box penetration and lowest point of sampled chains.
 
-    ``P`` (B, K, M, 3) m: M points along each chain (joint origins, base first) at K samples.
+    ``P`` (B, K, M, 3) m: M points along each chain (joint origins, base first) at K samples
+    (C-contiguous avoids a copy). ``center``/``half`` (3,) m: one box, or (nb, 3): several.
     Returns ``(depth, z_min)``, each (B,). ``depth``: the largest :func:`segment_box_depth` of
-    the M − 1 segments over the K samples into the box ``center``/``half`` (0 when nothing
-    enters, 0 without a box). ``z_min``: the lowest z of points 1..M−1 (the base point is
-    left out).
+    the M − 1 segments over the K samples into the boxes (0 when nothing enters, 0 without a
+    box). ``z_min``: the lowest z of points 1..M−1 (the base point is left out). One pass over
+    ``P`` for all boxes; a segment whose bounding box misses a box is skipped.
     """
     P = np.ascontiguousarray(P, dtype=np.float64)
     if P.ndim != 4 or P.shape[-1] != 3 or P.shape[2] < 2:
         raise ValueError(f"P: expected shape (B, K, M >= 2, 3), got {P.shape}")
-    use_box = center is not None
-    c = np.asarray(center if use_box else np.zeros(3), dtype=np.float64)
-    h = np.asarray(half if half is not None else np.zeros(3), dtype=np.float64)
+    if center is None:
+        c = np.zeros((0, 3))
+        h = np.zeros((0, 3))
+    else:
+        c = np.ascontiguousarray(np.asarray(center, dtype=np.float64).reshape(-1, 3))
+        h = np.ascontiguousarray(np.broadcast_to(
+            np.asarray(half if half is not None else np.zeros(3), dtype=np.float64), c.shape))
     depth = np.empty(P.shape[0])
     zmin = np.empty(P.shape[0])
-    _chain_kernel(P, c, h, use_box, depth, zmin)
+    _chain_kernel(P, c, h, depth, zmin)
     return depth, zmin
+
+
+@numba.njit(cache=True, nogil=True)
+def _travel_peak_kernel(q: FloatArray, qdd: FloatArray, theta: FloatArray,
+                        acc: FloatArray) -> None:  # pragma: no cover - compiled
+    B, K, n = q.shape
+    for b in range(B):
+        for i in range(n):
+            theta[b, i] = 0.0
+            acc[b, i] = 0.0
+        for i in range(n):
+            acc[b, i] = abs(qdd[b, 0, i])
+        for k in range(1, K):
+            for i in range(n):
+                theta[b, i] += abs(q[b, k, i] - q[b, k - 1, i])
+                a = abs(qdd[b, k, i])
+                if a > acc[b, i]:
+                    acc[b, i] = a
+
+
+def travel_and_peak(q: ArrayLike, qdd: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Per joint: travel ``Σ_k |q_k − q_{k−1}|`` (rad) and peak ``max_k |q̈_k|`` (rad/s²).
+
+    ``q``, ``qdd`` (B, K, n) → two (B, n) arrays (one pass, summed in k order: equal to
+    ``np.sum(np.abs(np.diff(q, axis=1)), axis=1)`` and ``np.max(np.abs(qdd), axis=1)``).
+    """
+    q = np.ascontiguousarray(q, dtype=np.float64)
+    qdd = np.ascontiguousarray(qdd, dtype=np.float64)
+    if q.ndim != 3 or q.shape != qdd.shape or q.shape[1] < 1:
+        raise ValueError(f"q, qdd: expected equal shapes (B, K >= 1, n), got {q.shape}, "
+                         f"{qdd.shape}")
+    theta = np.empty((q.shape[0], q.shape[2]))
+    acc = np.empty((q.shape[0], q.shape[2]))
+    _travel_peak_kernel(q, qdd, theta, acc)
+    return theta, acc

@@ -7,28 +7,36 @@ in DH frame i, i.e. after ``Tz Tx Rx`` (DESIGN.md §2). Modified DH (Craig): joi
 frame. Rotor inertia becomes Pinocchio's ``armature`` (``Jm·G²``, joint side).
 
 Frames added to the model: ``frame_1 … frame_n`` (the link frames) and ``tool``.
+
+URDF specifications are built by :mod:`legcore.robots.urdf_build` (whole files: fixed, locked,
+mimic and continuous joints) and :mod:`legcore.robots.urdf_legs` (legged robots).
 """
 
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from pydantic import TypeAdapter
 
-from legcore.robots.model import MotorArrays, Robot, chain_from_model
-from legcore.robots.spec import (
-    DHRobotSpec,
-    MotorSpec,
-    RobotSpec,
-    URDFRobotSpec,
-    validate_inertia,
-)
+from legcore.robots.legged import LeggedRobot
+from legcore.robots.model import Robot, chain_from_model
+from legcore.robots.spec import DHRobotSpec, RobotSpec, URDFRobotSpec
+from legcore.robots.urdf_build import build_urdf as _build_urdf
+from legcore.robots.urdf_build import motor_arrays
+from legcore.robots.urdf_parse import reject_declarations
 
-__all__ = ["build_robot", "parse_robot_spec", "rot_x", "rot_z", "dh_transform"]
+__all__ = [
+    "build_any_robot",
+    "build_robot",
+    "parse_robot_spec",
+    "reject_declarations",
+    "rot_x",
+    "rot_z",
+    "dh_transform",
+]
 
 _SPEC_ADAPTER: TypeAdapter[DHRobotSpec | URDFRobotSpec] = TypeAdapter(RobotSpec)
 
@@ -75,26 +83,6 @@ def dh_transform(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
 
 def _se3(T: np.ndarray) -> pin.SE3:
     return pin.SE3(np.ascontiguousarray(T[:3, :3]), np.ascontiguousarray(T[:3, 3]))
-
-
-def _motor_arrays(motors: list[MotorSpec | None]) -> MotorArrays:
-    def col(attr: str, default: float) -> np.ndarray:
-        out = []
-        for m in motors:
-            v = getattr(m, attr) if m is not None else None
-            out.append(default if v is None else float(v))
-        return np.asarray(out, dtype=float)
-
-    return MotorArrays(
-        G=col("G", 1.0),
-        Jm=col("Jm", 0.0),
-        Kt=col("Kt", math.nan),
-        Ke=col("Ke", math.nan),
-        R=col("R", math.nan),
-        B=col("B", 0.0),
-        Tc_pos=col("Tc_pos", 0.0),
-        Tc_neg=col("Tc_neg", 0.0),
-    )
 
 
 def _build_dh(spec: DHRobotSpec) -> Robot:
@@ -155,141 +143,36 @@ def _build_dh(spec: DHRobotSpec) -> Robot:
         qd_max=np.array([j.qd_max for j in spec.joints]),
         tau_max=np.array([j.tau_max if j.tau_max is not None else np.inf for j in spec.joints]),
         home=home,
-        motors=_motor_arrays([j.motor for j in spec.joints]),
+        motors=motor_arrays([j.motor for j in spec.joints]),
         chain=chain_from_model(model, tool_frame),
         ik_family=spec.ik,
     )
 
 
-def _prepare_urdf(text: str) -> tuple[str, list[str]]:
-    """Parse URDF text, map ``continuous`` joints to revolute ±2π, return (xml, movable names)."""
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as exc:
-        raise ValueError(f"urdf: not well-formed XML ({exc})") from None
-    if root.tag != "robot":
-        raise ValueError(f"urdf: root element must be <robot>, got <{root.tag}>")
-    movable: list[str] = []
-    for joint in root.iter("joint"):
-        jtype = joint.get("type", "")
-        name = joint.get("name", "?")
-        if jtype in {"floating", "planar"}:
-            raise ValueError(f"urdf: joint {name!r} has type {jtype!r}; only 1-DOF joints")
-        if jtype == "continuous":
-            joint.set("type", "revolute")
-            limit = joint.find("limit")
-            if limit is None:
-                limit = ET.SubElement(joint, "limit", effort="1e9", velocity="10")
-            limit.set("lower", str(-2 * math.pi))
-            limit.set("upper", str(2 * math.pi))
-        if joint.get("type") in {"revolute", "prismatic"}:
-            movable.append(name)
-            limit = joint.find("limit")
-            if limit is None:
-                raise ValueError(f"urdf: joint {name!r} needs a <limit> element")
-            lo, hi = float(limit.get("lower", "0")), float(limit.get("upper", "0"))
-            if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
-                raise ValueError(f"urdf: joint {name!r} limits must satisfy lower < upper")
-    for link in root.iter("link"):
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        lname = link.get("name", "?")
-        mass_el = inertial.find("mass")
-        mass = float(mass_el.get("value", "0")) if mass_el is not None else 0.0
-        if not math.isfinite(mass) or mass < 0:
-            raise ValueError(f"urdf: link {lname!r} mass must be a finite value >= 0 kg")
-        I_el = inertial.find("inertia")
-        if I_el is not None:
-            g = {k: float(I_el.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
-            inertia = np.array(
-                [
-                    [g["ixx"], g["ixy"], g["ixz"]],
-                    [g["ixy"], g["iyy"], g["iyz"]],
-                    [g["ixz"], g["iyz"], g["izz"]],
-                ]
-            )
-            if not np.all(np.isfinite(inertia)):
-                raise ValueError(f"urdf: link {lname!r} inertia has non-finite values")
-            try:
-                validate_inertia(inertia)
-            except ValueError as exc:
-                raise ValueError(f"urdf: link {lname!r} inertia: {exc}") from None
-    return ET.tostring(root, encoding="unicode"), movable
-
-
-def _build_urdf(spec: URDFRobotSpec) -> Robot:
-    xml, movable = _prepare_urdf(spec.urdf)
-    if not 1 <= len(movable) <= 12:
-        raise ValueError(f"urdf: needs 1 to 12 movable joints, found {len(movable)}")
-    try:
-        model = pin.buildModelFromXML(xml)
-    except Exception as exc:  # pinocchio raises RuntimeError/ValueError with its own text
-        raise ValueError(f"urdf: pinocchio could not build the model ({exc})") from None
-    model.name = spec.name
-    model.gravity.linear = np.asarray(spec.gravity, dtype=float)
-    n = model.njoints - 1
-    joint_names = list(model.names)[1:]
-    unknown = sorted(set(spec.motors) - set(joint_names))
-    if unknown:
-        raise ValueError(f"motors: unknown joint name(s) {unknown}")
-    motors = [spec.motors.get(name) for name in joint_names]
-    for i, m in enumerate(motors):
-        if m is not None:
-            model.armature[i] = m.Jm * m.G**2
-    # Link frames: the body frame of each joint's child link.
-    link_frames = []
-    for jid in range(1, n + 1):
-        bodies = [
-            fid
-            for fid, f in enumerate(model.frames)
-            if f.parentJoint == jid and f.type == pin.FrameType.BODY
-        ]
-        if not bodies:
-            raise ValueError(f"urdf: joint {model.names[jid]!r} has no child link")
-        link_frames.append(bodies[0])
-    if spec.tool_frame is not None:
-        if not model.existFrame(spec.tool_frame):
-            raise ValueError(f"tool_frame: no frame named {spec.tool_frame!r} in the URDF")
-        tool_src = model.frames[model.getFrameId(spec.tool_frame)]
-    else:  # deepest frame of the last joint (the last link or a fixed child of it)
-        tool_src = model.frames[
-            max(fid for fid, f in enumerate(model.frames) if f.parentJoint == n)
-        ]
-    tool_frame = model.addFrame(pin.Frame("tool", n, tool_src.placement, pin.FrameType.OP_FRAME))
-    chain = chain_from_model(model, tool_frame)
-    q_min = np.asarray(model.lowerPositionLimit, dtype=float).copy()
-    q_max = np.asarray(model.upperPositionLimit, dtype=float).copy()
-    qd_max = np.asarray(model.velocityLimit, dtype=float).copy()
-    qd_max[qd_max <= 0] = 10.0
-    tau = np.asarray(model.effortLimit, dtype=float).copy()
-    tau[tau <= 0] = np.inf
-    return Robot(
-        name=spec.name,
-        spec=spec,
-        model=model,
-        tool_frame=tool_frame,
-        link_frames=tuple(link_frames),
-        q_min=q_min,
-        q_max=q_max,
-        qd_max=qd_max,
-        tau_max=tau,
-        home=np.clip(np.zeros(n), q_min, q_max),
-        motors=_motor_arrays(motors),
-        chain=chain,
-        ik_family=None,
-        meta={"urdf": True},
-    )
-
-
-def build_robot(spec: DHRobotSpec | URDFRobotSpec | dict[str, Any]) -> Robot:
-    """Build a :class:`Robot` from a specification (or a mapping that validates into one).
+def build_any_robot(
+    spec: DHRobotSpec | URDFRobotSpec | dict[str, Any],
+) -> Robot | LeggedRobot:
+    """Build a robot from a specification (or a mapping that validates into one): a serial
+    :class:`Robot`, or a :class:`LeggedRobot` for a URDF spec with ``legs`` (and no ``leg``).
 
     Raises ``pydantic.ValidationError`` for a spec that fails the field rules and ``ValueError``
-    (message starting with the field, e.g. ``urdf: …``) for a URDF that fails the physical rules.
+    (message starting with the field, e.g. ``urdf: …``, ``locked_joints: …``) for a model that
+    fails the physical rules.
     """
     if isinstance(spec, dict):
         spec = parse_robot_spec(spec)
     if isinstance(spec, DHRobotSpec):
         return _build_dh(spec)
     return _build_urdf(spec)
+
+
+def build_robot(spec: DHRobotSpec | URDFRobotSpec | dict[str, Any]) -> Robot:
+    """Build a serial :class:`Robot` from a specification (see :func:`build_any_robot`; a spec
+    of a whole legged robot is a ``ValueError`` here — give ``leg`` to get one of its legs)."""
+    robot = build_any_robot(spec)
+    if isinstance(robot, LeggedRobot):
+        raise ValueError(
+            f"legs: {robot.name!r} is a legged robot ({robot.n_legs} legs), not a serial chain; "
+            f"give 'leg' (one of {[leg.name for leg in robot.legs]}) for one leg's chain"
+        )
+    return robot

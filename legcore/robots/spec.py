@@ -31,6 +31,7 @@ __all__ = [
     "MotorSpec",
     "DHJoint",
     "DHRobotSpec",
+    "LegSpec",
     "URDFRobotSpec",
     "RobotSpec",
     "validate_inertia",
@@ -50,27 +51,29 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-def validate_inertia(inertia: np.ndarray) -> None:
+def validate_inertia(inertia: np.ndarray, tol: float = 0.0) -> None:
     """Check a 3×3 rotational inertia about the COM (kg·m²) for physical consistency.
 
     Raises ``ValueError`` if it is not symmetric, not positive semi-definite, or its principal
-    moments violate the triangle inequality ``I_a + I_b >= I_c``.
+    moments violate the triangle inequality ``I_a + I_b >= I_c`` by more than the slack: the
+    larger of ``tol`` (kg·m², e.g. a tolerance relative to the whole robot's scale) and 1e-12
+    times ``max(1, max |I_ij|)`` (rounding).
     """
     inertia = np.asarray(inertia, dtype=float)
     if inertia.shape != (3, 3):
         raise ValueError(f"must be a 3x3 matrix, got shape {inertia.shape}")
-    scale = max(1.0, float(np.abs(inertia).max()))
+    slack = max(float(tol), _INERTIA_TOL * max(1.0, float(np.abs(inertia).max())))
     asym = float(np.abs(inertia - inertia.T).max())
-    if asym > _INERTIA_TOL * scale:
+    if asym > slack:
         raise ValueError(f"not symmetric (max |I - I^T| = {asym:.3e} kg·m²)")
     eig = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
-    if eig[0] < -_INERTIA_TOL * scale:
+    if eig[0] < -slack:
         raise ValueError(f"not positive semi-definite (smallest eigenvalue {eig[0]:.3e} kg·m²)")
     a, b, c = eig  # ascending
-    if a + b < c - _INERTIA_TOL * scale:
+    if a + b < c - slack:
         raise ValueError(
             f"principal moments ({a:.3e}, {b:.3e}, {c:.3e}) kg·m² violate the triangle "
-            "inequality I_a + I_b >= I_c"
+            f"inequality I_a + I_b >= I_c by {c - a - b:.3e} kg·m²"
         )
 
 
@@ -220,16 +223,85 @@ class DHRobotSpec(_Strict):
         return self
 
 
+#: A leg name (also the prefix of its joints' names in listings and recordings).
+LegName = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_\-]+$")]
+#: A joint, link or frame name of a URDF.
+URDFName = Annotated[str, Field(min_length=1, max_length=200)]
+
+
+class LegSpec(_Strict):
+    """One leg of a legged URDF robot, named by its ``foot`` (a link or frame: the leg is the
+    chain of moving joints from the base down to it), by its ``hip`` joint (the leg is that joint
+    and the joints below it, down to the leaf of its subtree, whose end frame is the foot), or by
+    both (the chain from ``hip`` to ``foot``)."""
+
+    hip: URDFName | None = None
+    foot: URDFName | None = None
+
+    @model_validator(mode="after")
+    def _named(self) -> LegSpec:
+        if self.hip is None and self.foot is None:
+            raise ValueError("name the leg by its 'hip' joint, its 'foot' frame, or both")
+        return self
+
+
 class URDFRobotSpec(_Strict):
-    """A serial chain given as URDF text (revolute/prismatic/continuous joints)."""
+    """A robot given as URDF text: a serial chain, or a legged robot when ``legs`` is given.
+
+    Only kinematics and inertias are read; meshes and every other file name in the text stay
+    strings (never opened). ``continuous`` joints become revolute joints limited to ±2π rad.
+
+    ``locked_joints`` — joints the study does not move (gripper fingers, a head, the other legs
+    …), each held at the given value (rad or m) or, when the value is null, at its home value
+    (zero clipped to the joint's limits). A ``<mimic>`` joint follows its master: it is locked
+    with it (at ``multiplier · master + offset``) and cannot move on its own.
+
+    ``tool_frame`` — a serial chain's end frame (a link or frame attached to its last moving
+    joint); by default the leaf of the chain's end: the frame attached to the last joint that
+    no other frame hangs from, the one farthest from that joint on a tie.
+
+    ``legs`` — a legged robot: a floating base (the root link) carrying legs, each a serial
+    chain of moving joints; ``"auto"`` finds one leg per leaf of the joint tree (named by the
+    common prefix of its joints' names, e.g. ``FL`` for ``FL_HAA, FL_HFE, FL_KFE``, else by its
+    foot). Every moving joint must belong to exactly one leg (lock the others). ``leg`` — build
+    only that leg, as a fixed-base serial chain whose base frame sits at its hip joint (axes of
+    the body), for the single-leg studies.
+    """
 
     kind: Literal["urdf"] = "urdf"
     name: str = Field(min_length=1, max_length=64)
     urdf: str = Field(min_length=1, max_length=2_000_000)
-    tool_frame: str | None = None
+    tool_frame: URDFName | None = None
+    locked_joints: dict[URDFName, FiniteFloat | None] = Field(default_factory=dict, max_length=500)
+    legs: dict[LegName, LegSpec] | Literal["auto"] | None = None
+    leg: LegName | None = None
     motors: dict[str, MotorSpec] = Field(default_factory=dict)
     gravity: Vec3 = Field(default_factory=lambda: [0.0, 0.0, -9.81])
     description: str = Field(default="", max_length=4000)
+
+    @field_validator("legs")
+    @classmethod
+    def _some_legs(cls, v: dict[str, LegSpec] | str | None) -> dict[str, LegSpec] | str | None:
+        if isinstance(v, dict) and not 1 <= len(v) <= 8:
+            raise ValueError(f"a legged robot has 1 to 8 legs, got {len(v)}")
+        return v
+
+    @model_validator(mode="after")
+    def _legs_consistent(self) -> URDFRobotSpec:
+        if self.legs is not None and self.tool_frame is not None:
+            raise ValueError(
+                "tool_frame: a legged robot's legs end at their feet; name them in "
+                "legs.<leg>.foot instead"
+            )
+        if self.leg is not None:
+            if self.legs is None:
+                raise ValueError(
+                    f"leg: {self.leg!r} names a leg of a legged robot; give 'legs' too "
+                    "(e.g. legs: auto)"
+                )
+            if isinstance(self.legs, dict) and self.leg not in self.legs:
+                raise ValueError(f"leg: no leg {self.leg!r} in legs {sorted(self.legs)}")
+        return self
 
 
 def _robot_kind(value: object) -> str | None:

@@ -21,10 +21,14 @@ from fastapi import APIRouter, Depends, FastAPI
 from services.api.body_limit import DEFAULT_MAX_BODY_BYTES, BodySizeLimitMiddleware
 from services.api.deps import API_KEY_HEADER, ApiContext, Enqueue, current_key, default_enqueue
 from services.api.errors import install_error_handlers
-from services.api.routes import health, jobs, robots, sweeps
+from services.api.json_guard import JsonGuardMiddleware
+from services.api.rate_limit import RateLimiter
+from services.api.routes import health, jobs, keys, robots, studies, sweeps
+from services.api.routes.dashboard_routers import DASHBOARD_ROUTERS
 from services.api.schemas import ErrorOut
 from services.api.sweeps import MAX_SWEEP_JOBS
 from services.store.settings import Settings, get_settings
+from services.web import mount_dashboard
 
 API_PREFIX = "/api/v1"
 
@@ -52,17 +56,20 @@ def create_app(
     Args:
         settings: database URL, artifact directory and job size limits (default
             ``get_settings()``, i.e. the ``LEGOPT_*`` environment).
-        enqueue: ``enqueue(job_id)`` sends a committed job to the workers (default: Celery via
-            ``services.worker.tasks.enqueue``). If it raises, the jobs not sent are cancelled
-            and the request answers 503.
+        enqueue: ``enqueue(job_id)`` sends a committed job's message to the workers (default:
+            Celery via ``services.worker.tasks.enqueue``), after the send is claimed in the
+            database. If it raises, the job stays queued and due, and the dispatcher of the
+            workers sends it once the broker answers.
         max_body_bytes: larger request bodies are refused with 413.
         max_sweep_jobs: a sweep expanding to more jobs is refused with 422.
     """
+    settings = settings if settings is not None else get_settings()
     ctx = ApiContext(
-        settings=settings if settings is not None else get_settings(),
+        settings=settings,
         enqueue=enqueue if enqueue is not None else default_enqueue,
         max_sweep_jobs=max_sweep_jobs,
         prefix=API_PREFIX,
+        rate_limiter=RateLimiter(settings.rate_limit_per_s, settings.rate_limit_burst),
     )
 
     @asynccontextmanager
@@ -75,11 +82,12 @@ def create_app(
         version="1",
         description=DESCRIPTION,
         openapi_url=f"{API_PREFIX}/openapi.json",
-        docs_url=f"{API_PREFIX}/docs",
-        redoc_url=f"{API_PREFIX}/redoc",
+        docs_url=None,  # served by mount_dashboard from local files (no CDN)
+        redoc_url=None,
         lifespan=lifespan,
     )
     app.state.context = ctx
+    app.add_middleware(JsonGuardMiddleware)  # depth / NaN checks, inside the size limit
     app.add_middleware(BodySizeLimitMiddleware, max_bytes=max_body_bytes)
     install_error_handlers(app)
 
@@ -92,7 +100,12 @@ def create_app(
     protected.include_router(robots.router)
     protected.include_router(jobs.router)
     protected.include_router(sweeps.router)
+    protected.include_router(keys.router)
+    protected.include_router(studies.router)
+    for router in DASHBOARD_ROUTERS:
+        protected.include_router(router)
     app.include_router(protected)
+    mount_dashboard(app, settings, API_PREFIX)  # /, /docs, /static, /viewer, {API_PREFIX}/docs
     return app
 
 

@@ -21,12 +21,12 @@ from fastapi.security import APIKeyHeader
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
+from services.api.rate_limit import RateLimiter, retry_after_header
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT
 from services.store.artifacts import ArtifactStore
 from services.store.keys import hash_api_key
-from services.store.lifecycle import request_cancel
 from services.store.records import ApiKeyRecord
-from services.store.repository import get_api_key_by_hash
+from services.store.repository import get_api_key_by_hash, now_utc
 from services.store.session import engine_from_settings, make_session_factory, session_scope
 from services.store.settings import Settings
 
@@ -41,11 +41,17 @@ API_KEY_HEADER = "X-API-Key"
 
 
 def default_enqueue(job_id: str) -> None:
-    """Send the job to the Celery workers (imported lazily: the API does not need Celery
-    until it enqueues)."""
+    """Send the job's message to the Celery workers (imported lazily: the API does not need
+    Celery until it sends)."""
     from services.worker.tasks import enqueue
 
     enqueue(job_id)
+
+
+def _api_actor() -> str:
+    from services.worker.dispatcher import process_actor
+
+    return process_actor("api")
 
 
 @dataclass
@@ -57,6 +63,8 @@ class ApiContext:
     enqueue: Enqueue = default_enqueue
     max_sweep_jobs: int = 1000
     prefix: str = "/api/v1"
+    actor: str = field(default_factory=_api_actor)
+    rate_limiter: RateLimiter | None = None
     _engine: Engine | None = field(default=None, init=False, repr=False)
     _factory: sessionmaker[Session] | None = field(default=None, init=False, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, init=False, repr=False)
@@ -88,23 +96,20 @@ class ApiContext:
             yield session
 
     def send_jobs(self, job_ids: Sequence[str]) -> None:
-        """Enqueue committed jobs. If the queue fails, the jobs not sent are cancelled (they
-        would otherwise wait forever) and the request ends with a 503 saying so."""
-        for i, job_id in enumerate(job_ids):
-            try:
-                self.enqueue(job_id)
-            except Exception as exc:
-                log.exception("enqueue of job %s failed", job_id)
-                unsent = list(job_ids[i:])
-                with self.write() as session:
-                    for jid in unsent:
-                        request_cancel(session, jid)
-                raise HTTPException(
-                    status.HTTP_503_SERVICE_UNAVAILABLE,
-                    f"the job queue is unavailable ({type(exc).__name__}: {exc}); "
-                    f"{len(unsent)} job(s) could not be queued and were cancelled: "
-                    f"{', '.join(unsent[:10])}{' ...' if len(unsent) > 10 else ''}",
-                ) from None
+        """Send the messages of committed jobs now (claimed in the database first). A job whose
+        message cannot be sent (broker down) stays queued and due: the dispatcher sends it
+        when the broker is back, so an accepted job is never lost."""
+        from services.worker.dispatcher import send_now
+
+        unsent = send_now(
+            job_ids, self.enqueue, actor=self.actor, settings=self.settings,
+            bind=self.session_factory,
+        )  # fmt: skip
+        if unsent:
+            log.warning(
+                "%d job(s) stay queued until the broker answers (the dispatcher retries)",
+                len(unsent),
+            )
 
     def close(self) -> None:
         """Dispose of the engine (app shutdown); a later use builds a new one."""
@@ -147,10 +152,40 @@ def current_key(
             "invalid API key",
             headers={"WWW-Authenticate": API_KEY_HEADER},
         )
+    reason = key.invalid_reason(now_utc())
+    if reason is not None:
+        raise HTTPException(
+            status.HTTP_401_UNAUTHORIZED,
+            f"{reason}: ask an admin for a new key (`legopt keys create`)",
+            headers={"WWW-Authenticate": API_KEY_HEADER},
+        )
+    if ctx.rate_limiter is not None:
+        wait = ctx.rate_limiter.acquire(key.id)
+        if wait > 0:
+            raise HTTPException(
+                status.HTTP_429_TOO_MANY_REQUESTS,
+                f"too many requests for this API key: at most {ctx.settings.rate_limit_per_s:g} "
+                f"per second (bursts of {ctx.settings.rate_limit_burst}); retry in "
+                f"{retry_after_header(wait)} s",
+                headers={"Retry-After": retry_after_header(wait)},
+            )
     return key
 
 
 CurrentKey = Annotated[ApiKeyRecord, Depends(current_key)]
+
+
+def admin_key(key: CurrentKey) -> ApiKeyRecord:
+    """The caller's key if it is an admin key; 403 otherwise."""
+    if not key.is_admin:
+        raise HTTPException(
+            status.HTTP_403_FORBIDDEN,
+            "this route needs an admin API key (`legopt keys create --admin`)",
+        )
+    return key
+
+
+AdminKey = Annotated[ApiKeyRecord, Depends(admin_key)]
 
 
 @dataclass(frozen=True)
@@ -173,6 +208,7 @@ Pagination = Annotated[PageParams, Depends(page_params)]
 
 __all__ = [
     "API_KEY_HEADER",
+    "AdminKey",
     "ApiContext",
     "Context",
     "CurrentKey",

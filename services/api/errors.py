@@ -17,6 +17,7 @@ logged 500 with a short message (user input never gets there: it is validated fi
 from __future__ import annotations
 
 import logging
+import math
 import re
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -82,16 +83,22 @@ def _is_internal_loc_part(part: str | int) -> bool:
     return isinstance(part, str) and ("[" in part or part in {"str", "int", "float", "bool"})
 
 
-def clean_pydantic_errors(exc: ValidationError, prefix: Loc = ()) -> list[dict[str, Any]]:
+def clean_pydantic_errors(
+    exc: ValidationError, prefix: Loc = (), locs: Sequence[Sequence[str | int]] | None = None
+) -> list[dict[str, Any]]:
     """The errors of ``exc`` as plain JSON entries located under ``prefix``.
 
-    Locations drop pydantic's internal union member names, and a ``value_error`` whose message
-    starts with a field path (``"params.pop_size: must be >= 2"``) gets that path appended to its
-    location. Inputs and contexts are left out (they may be large or not JSON).
+    Locations (``locs[i]`` when given: one per error, e.g. from
+    ``legcore.jobspec.spec_error_locations``) drop pydantic's internal union member names, and a
+    ``value_error`` whose message starts with a field path (``"params.pop_size: must be >= 2"``)
+    gets that path appended to its location. Inputs and contexts are left out (they may be
+    large or not JSON).
     """
     out: list[dict[str, Any]] = []
-    for err in exc.errors(include_url=False, include_context=False, include_input=False):
-        loc: Loc = tuple(p for p in err["loc"] if not _is_internal_loc_part(p))
+    raw = exc.errors(include_url=False, include_context=False, include_input=False)
+    for i, err in enumerate(raw):
+        given = locs[i] if locs is not None else err["loc"]
+        loc: Loc = tuple(p for p in given if not _is_internal_loc_part(p))
         msg = str(err["msg"])
         if err["type"] == "value_error" and msg.startswith(_VALUE_ERROR_PREFIX):
             msg = msg[len(_VALUE_ERROR_PREFIX) :]
@@ -128,6 +135,53 @@ def _detail(status_code: int, message: str) -> JSONResponse:
     return JSONResponse(status_code=status_code, content={"detail": message})
 
 
+def _text(value: Any) -> str:
+    """``str(value)`` encodable as UTF-8 (a lone surrogate from the input becomes ``\\udXXX``)."""
+    return str(value).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _json_safe(value: Any, depth: int = 0) -> Any:
+    """``value`` with anything JSON cannot carry (NaN, bytes, objects) turned into text."""
+    if isinstance(value, str):
+        return _text(value)
+    if value is None or isinstance(value, bool | int):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else repr(value)
+    if depth < 4 and isinstance(value, dict):
+        return {str(k): _json_safe(v, depth + 1) for k, v in value.items()}
+    if depth < 4 and isinstance(value, list | tuple):
+        return [_json_safe(v, depth + 1) for v in value]
+    return _text(value)[:200]
+
+
+def public_errors(errors: Sequence[Any]) -> list[dict[str, Any]]:
+    """Validation errors as the API answers them: ``type``, ``loc``, ``msg`` (and ``ctx`` made
+    JSON-safe). The offending ``input`` is never echoed back: it may be large (a URDF), not
+    JSON at all (bytes, NaN) or another part of the request the client already has."""
+    out: list[dict[str, Any]] = []
+    for err in list(errors)[:MAX_ERRORS]:
+        if not isinstance(err, dict):
+            out.append(field_error([], str(err)))
+            continue
+        entry = {
+            "type": _text(err.get("type", "value_error")),
+            "loc": [p if isinstance(p, int) else _text(p) for p in err.get("loc", ())],
+            "msg": _text(err.get("msg", "")),
+        }
+        if isinstance(err.get("ctx"), dict):
+            entry["ctx"] = _json_safe(err["ctx"])
+        out.append(entry)
+    return out
+
+
+async def _request_invalid(_request: Request, exc: Exception) -> JSONResponse:
+    errors = exc.errors() if isinstance(exc, RequestValidationError) else []
+    return JSONResponse(
+        status_code=status.HTTP_422_UNPROCESSABLE_CONTENT, content={"detail": public_errors(errors)}
+    )
+
+
 async def _not_found(_request: Request, exc: Exception) -> JSONResponse:
     return _detail(status.HTTP_404_NOT_FOUND, str(exc) or "not found")
 
@@ -150,7 +204,9 @@ async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
 
 
 def install_error_handlers(app: FastAPI) -> None:
-    """Map store errors to 404 / 409 / 500 and anything unexpected to a logged 500."""
+    """422 for request validation errors (JSON-safe, see ``public_errors``); store errors to
+    404 / 409 / 500 and anything unexpected to a logged 500."""
+    app.add_exception_handler(RequestValidationError, _request_invalid)
     app.add_exception_handler(NotFoundError, _not_found)
     app.add_exception_handler(ConflictError, _conflict)
     app.add_exception_handler(ArtifactError, _artifact)
@@ -172,6 +228,7 @@ __all__ = [
     "invalid",
     "loc_parts",
     "not_found",
+    "public_errors",
     "split_field_message",
     "validation_error",
 ]

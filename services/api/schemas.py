@@ -206,9 +206,9 @@ class RobotDetail(RobotOut):
     spec: Any = Field(description="The inline spec, or {'catalog': name}.")
     inline_spec: Any = Field(
         default=None,
-        description="The model as an inline DH/URDF spec (serial robots, catalog ones too): "
-        "copy it to modify the robot, or use it as a sweep base to sweep its parameters. "
-        "Null for legged robots.",
+        description="The model as an inline DH/URDF spec (serial robots, catalog ones too, and "
+        "URDF legged robots): copy it to modify the robot, or use it as a sweep base to sweep "
+        "its parameters. Null for the catalog's legged robots.",
     )
     summary: RobotSummaryOut
 
@@ -256,8 +256,11 @@ class JobOut(BaseModel):
     finished_at: datetime | None = None
 
     @classmethod
-    def from_record(cls, job: JobRecord) -> JobOut:
-        spec = job.spec if isinstance(job.spec, dict) else {}
+    def from_record(cls, job: JobRecord, spec: Any = None) -> JobOut:
+        """``spec``: the job's spec (or the fields ``repository.job_labels`` gives) when the
+        record holds none (a job of a sweep)."""
+        spec = spec if isinstance(spec, dict) else job.spec
+        spec = spec if isinstance(spec, dict) else {}
         problem = spec.get("problem")
         return cls(
             id=job.id,
@@ -285,8 +288,10 @@ class JobDetail(JobOut):
     spec: Any
 
     @classmethod
-    def from_record(cls, job: JobRecord) -> JobDetail:
-        return cls(**JobOut.from_record(job).model_dump(), spec=job.spec)
+    def from_record(cls, job: JobRecord, spec: Any = None) -> JobDetail:
+        """``spec``: the job's full spec (``repository.job_spec``; default: the record's)."""
+        spec = spec if spec is not None else job.spec
+        return cls(**JobOut.from_record(job, spec).model_dump(), spec=spec)
 
 
 class BaselineOut(BaseModel):

@@ -1,6 +1,6 @@
 """Validation of the documents users send (robot models, job specs) before anything is stored.
 
-Every check is legcore's own (``parse_robot_spec``/``build_robot``, ``parse_job_spec``,
+Every check is legcore's own (``parse_robot_spec``/``build_any_robot``, ``parse_job_spec``,
 ``prepare``, ``job_size``) plus the settings' size limits; this module only resolves robot
 references and turns legcore's errors into 422s located at the offending field (see
 ``services.api.errors``). Nothing here touches the database: stored robots are looked up through
@@ -15,20 +15,23 @@ from collections.abc import Callable, MutableMapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 
 from legcore.jobspec import JobSpec, parse_job_spec, spec_error_locations
-from legcore.robots import LeggedRobot, Robot, build_robot, catalog, parse_robot_spec
-from legcore.runner import JobSize, job_size, prepare
+from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog, parse_robot_spec
+from legcore.runner import JobSize, job_size
 from services.api.errors import (
     Loc,
     clean_pydantic_errors,
+    field_error,
     from_pydantic,
     from_value_error,
     invalid,
     split_field_message,
     validation_error,
 )
+from services.api.spec_cache import BuiltRobot, SpecCache, prepare_with
 from services.store.settings import Settings
 
 log = logging.getLogger("legopt.api")
@@ -94,7 +97,7 @@ def catalog_robot(name: Any, loc: Loc) -> Robot | LeggedRobot:
     return catalog.get(name)
 
 
-def build_inline_robot(spec: Any, loc: Loc) -> tuple[dict[str, Any], Robot]:
+def build_inline_robot(spec: Any, loc: Loc) -> tuple[dict[str, Any], Robot | LeggedRobot]:
     """Validate and BUILD an inline DH/URDF spec; returns ``(document, robot)``.
 
     The document is the user's mapping with its ``kind`` made explicit. A spec failing the
@@ -105,7 +108,7 @@ def build_inline_robot(spec: Any, loc: Loc) -> tuple[dict[str, Any], Robot]:
         raise invalid(loc, "must be an object: a DH or URDF robot spec", "dict_type")
     try:
         parsed = parse_robot_spec(spec)
-        robot = build_robot(parsed)
+        robot = build_any_robot(parsed)
     except ValidationError as exc:
         raise from_pydantic(exc, loc) from None
     except ValueError as exc:
@@ -162,11 +165,8 @@ def resolve_robot(doc: dict[str, Any], lookup: RobotLookup, prefix: Loc) -> dict
 def _job_errors(exc: ValidationError, doc: dict[str, Any], prefix: Loc) -> list[dict[str, Any]]:
     """Pydantic errors of a job spec, without the study kind pydantic puts in ``problem``
     locations (``problem.swing_energy.obstacle`` -> ``problem.obstacle``)."""
-    errors = clean_pydantic_errors(exc, prefix)
-    n = len(prefix)
-    for err, (loc, _) in zip(errors, spec_error_locations(exc, doc), strict=True):
-        err["loc"] = [*err["loc"][:n], *loc]
-    return errors
+    locs = [loc for loc, _ in spec_error_locations(exc, doc)]
+    return clean_pydantic_errors(exc, prefix, locs=locs)
 
 
 _POPULATION_PARAMS = ("pop_size", "n_samples", "n_subproblems")
@@ -188,13 +188,29 @@ def _size_loc(reason: str, doc: dict[str, Any], prefix: Loc) -> Loc:
     return (*prefix, "budget")
 
 
-def _cache_key(doc: dict[str, Any]) -> str | None:
-    """Key of the expensive part (prepare + size): the spec without seed and name."""
-    try:
-        rest = {k: v for k, v in doc.items() if k not in ("seed", "name")}
-        return json.dumps(rest, sort_keys=True, allow_nan=False)
-    except (TypeError, ValueError):
-        return None
+def _memory_error(
+    reason: str, size: JobSize, doc: dict[str, Any], prefix: Loc
+) -> RequestValidationError:
+    """A job whose predicted peak memory exceeds the per-worker limit: one error on the
+    population parameter and one on the problem (its samples per trajectory), both naming the
+    two fields, the predicted MiB and the limit."""
+    pop_loc = _size_loc("population", doc, prefix)
+    field = ".".join(str(p) for p in pop_loc[len(prefix) :])
+    if field == "optimizer.params":
+        field = "optimizer.params.pop_size"
+    msg = (
+        f"job too large: {reason}; it grows with the population ({field} = {size.population}) "
+        f"times the samples per trajectory (problem: {size.samples} samples, e.g. problem.dt "
+        "or problem.n_samples): lower one of them"
+    )
+    return validation_error(
+        [field_error(pop_loc, msg, "job_too_large"), field_error((*prefix, "problem"), msg,
+                                                                 "job_too_large")]
+    )
+
+
+#: Top-level fields of a job spec validated once per distinct content within a request.
+_MODEL_FIELDS = ("problem", "optimizer")
 
 
 def check_job_spec(
@@ -203,43 +219,126 @@ def check_job_spec(
     settings: Settings,
     lookup: RobotLookup,
     prefix: Loc = ("body",),
-    cache: MutableMapping[str, tuple[int, JobSize]] | None = None,
+    cache: MutableMapping[str, Any] | None = None,
 ) -> CheckedJob:
     """Validate a job spec document exactly as the worker will run it, before storing it.
 
     Steps: resolve the robot reference (stored robots by id or name), build an inline robot,
-    ``parse_job_spec``, ``prepare`` (robot + problem + algorithm), ``job_size`` against the
-    settings' limits. Any failure is a ``RequestValidationError`` located under ``prefix``.
-    ``cache`` (shared across the jobs of one sweep) skips ``prepare`` for specs that differ
-    only in seed or name.
+    ``parse_job_spec``, prepare (robot + problem + algorithm + termination, as
+    ``legcore.runner.prepare``), ``job_size`` against the settings' limits. Any failure is a
+    ``RequestValidationError`` located under ``prefix``.
+
+    ``cache`` (one mapping per request, shared by the jobs of a sweep) makes the request cost
+    O(its size) rather than O(jobs × size) — see ``services.api.spec_cache``: each distinct
+    robot document is built once, each distinct ``problem`` / ``optimizer`` validated once, each
+    distinct (robot, problem) study problem built once, and job sizes computed once per
+    distinct (robot, problem, optimizer, budget); failures are remembered the same way.
     """
     if not isinstance(doc, dict):
         raise invalid(prefix, "a job spec must be a JSON object", "dict_type")
-    doc = resolve_robot(doc, lookup, prefix)
-    if isinstance(doc.get("robot"), dict):
-        doc = {**doc, "robot": build_inline_robot(doc["robot"], (*prefix, "robot"))[0]}
-    try:
-        spec = parse_job_spec(doc)
-    except ValidationError as exc:
-        raise validation_error(_job_errors(exc, doc, prefix)) from None
+    memo = SpecCache.attach(cache if cache is not None else {}, repr(prefix))
+    doc = resolve_robot(doc, memo.memo_lookup(lookup), prefix)
+    light = dict(doc)  # the document to validate, with already-validated parts substituted
 
-    key = _cache_key(doc) if cache is not None else None
-    if cache is not None and key is not None and key in cache:
-        total, size = cache[key]
+    robot_doc = doc.get("robot")
+    built: Robot | LeggedRobot | None = None
+    if isinstance(robot_doc, dict):
+        rkey = memo.key(robot_doc)
+        entry = memo.robots.get(rkey)
+        if entry is None:
+            urdf = robot_doc.get("urdf")
+            memo.charge(len(urdf) if isinstance(urdf, str) else 0, (*prefix, "robot"))
+            try:
+                memo.count("robot_builds")
+                entry = BuiltRobot(*build_inline_robot(robot_doc, (*prefix, "robot")))
+            except RequestValidationError as exc:
+                entry = list(exc.errors())
+            memo.robots[rkey] = entry
+        if isinstance(entry, list):
+            raise validation_error(entry)
+        doc = {**doc, "robot": entry.document}
+        light["robot"] = entry.robot.spec
+        built = entry.robot
     else:
-        total, size = _prepare_and_size(spec, doc, prefix)
-        if cache is not None and key is not None:
-            cache[key] = (total, size)
+        rkey = "ref:" + json.dumps(robot_doc)
 
-    reason = settings.check_job_size(size.population, size.generations, size.samples)
+    keys = {f: memo.key(doc[f]) for f in _MODEL_FIELDS if isinstance(doc.get(f), dict)}
+    for f, key in keys.items():
+        if (f, key) in memo.failures:
+            raise validation_error(memo.failures[(f, key)])
+        if (f, key) in memo.models:
+            light[f] = memo.models[(f, key)]
+    spec = _parse(light, doc, prefix, keys, memo)
+
+    pkey = keys.get("problem", "none")
+    size_key = (rkey, pkey, keys.get("optimizer", "none"), memo.key(doc.get("budget")))
+    found = memo.sizes.get(size_key)
+    if found is None:
+        if (rkey, pkey) not in memo.problems:
+            csv = getattr(spec.problem, "csv", None)
+            memo.charge(len(csv) if isinstance(csv, str) else 0, (*prefix, "problem"))
+        try:
+            memo.count("prepares")
+            found = _prepare_and_size(spec, doc, prefix, built, memo.problems, (rkey, pkey))
+        except RequestValidationError as exc:
+            found = list(exc.errors())
+        memo.sizes[size_key] = found
+    if isinstance(found, list):
+        raise validation_error(found)
+    total, size = found
+
+    reason = settings.check_job_size(
+        size.population, size.generations, size.samples, size.peak_bytes
+    )
+    if reason is not None and reason.startswith("memory"):
+        raise _memory_error(reason, size, doc, prefix)
     if reason is not None:
         raise invalid(_size_loc(reason, doc, prefix), f"job too large: {reason}", "job_too_large")
     return CheckedJob(spec=doc, total_generations=total, size=size)
 
 
-def _prepare_and_size(spec: JobSpec, doc: dict[str, Any], prefix: Loc) -> tuple[int, JobSize]:
+def _parse(
+    light: dict[str, Any],
+    doc: dict[str, Any],
+    prefix: Loc,
+    keys: dict[str, str],
+    memo: SpecCache,
+) -> JobSpec:
+    """``parse_job_spec(light)``; remembers the validated ``problem`` / ``optimizer`` models
+    (and the errors of a bad one) under their content keys."""
     try:
-        prepared = prepare(spec)
+        spec = parse_job_spec(light)
+    except ValidationError as exc:
+        errors = _job_errors(exc, doc, prefix)
+        for f, key in keys.items():
+            mine = [e for e in errors if e["loc"][len(prefix) : len(prefix) + 1] == [f]]
+            if mine:
+                memo.failures[(f, key)] = mine
+        raise validation_error(errors) from None
+    except ArithmeticError as exc:  # a validator overflowing (e.g. T / dt with dt = 1e-320)
+        log.warning("job spec validation overflowed: %r", exc)
+        raise invalid(
+            (*prefix, "problem"),
+            f"a number is out of range ({type(exc).__name__}: {exc}): a step, resolution or "
+            "duration too close to 0 or too large; use values of a physical size",
+        ) from None
+    for f, key in keys.items():
+        memo.models[(f, key)] = getattr(spec, f)
+    return spec
+
+
+def _prepare_and_size(
+    spec: JobSpec,
+    doc: dict[str, Any],
+    prefix: Loc,
+    robot: Robot | LeggedRobot | None,
+    problems: dict[tuple[str, str], Any],
+    problem_key: tuple[str, str],
+) -> tuple[int, JobSize]:
+    """``legcore.runner.prepare`` + ``job_size`` reusing an already built robot and study
+    problem; errors as 422s located under ``prefix``."""
+    try:
+        prepared = prepare_with(spec, robot, problems, problem_key)
         size = job_size(prepared)
     except ValidationError as exc:
         raise validation_error(_job_errors(exc, doc, prefix)) from None

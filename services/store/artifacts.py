@@ -1,11 +1,16 @@
 """Artifact store on a local directory (``.rrd`` recordings, CSV exports).
 
-Layout: ``<root>/<job_id>/<kind><suffix>``, e.g. ``<root>/<job id>/recording.rrd``; the
-relative path (always ``/``-separated) is what the ``artifacts`` table stores next to the
-SHA-256 and the size. Writes are atomic: bytes go to a temporary file in the target directory,
-are fsync'ed, then ``os.replace``d over the final name, so a reader sees the old file or the
-new one, never half of one. Reads verify the checksum when one is given. Paths that would leave
-the root (absolute, ``..``, symlinks out) are rejected with ``UnsafePathError``.
+Layout: ``<root>/<job_id>/<attempt>/<kind><suffix>``, e.g.
+``<root>/<job id>/a2-3f9c01/recording.rrd``: each attempt of a worker at a job writes under its
+own directory, and its files become the job's only when the worker's lease-checked
+``finish_job`` records their relative path (always ``/``-separated) with the SHA-256 and the
+size. A stale worker that lost its lease can therefore never overwrite the winner's files; it
+removes its own attempt directory (``delete_attempt``). Files stored without an attempt go to
+``<root>/<job_id>/<kind><suffix>``. Writes are atomic: bytes go to a temporary file in the
+target directory, are fsync'ed, then ``os.replace``d over the final name, so a reader sees the
+old file or the new one, never half of one. Reads verify the checksum when one is given. Paths
+that would leave the root (absolute, ``..``, symlinks out) are rejected with
+``UnsafePathError``.
 """
 
 from __future__ import annotations
@@ -80,13 +85,18 @@ class ArtifactStore:
 
     # ------------------------------------------------------------------ paths
 
-    def relative_path(self, job_id: str, kind: str, suffix: str | None = None) -> str:
-        """The relative path of a job's artifact of ``kind`` (validated)."""
+    def relative_path(
+        self, job_id: str, kind: str, suffix: str | None = None, attempt: str | None = None
+    ) -> str:
+        """The relative path of a job's artifact of ``kind`` (validated), under the directory
+        of ``attempt`` when given."""
         _safe_name(job_id, "job id")
         _safe_name(kind, "artifact kind")
         suffix = KIND_SUFFIXES.get(kind, ".bin") if suffix is None else suffix
         if not _SUFFIX.match(suffix):
             raise UnsafePathError(f"invalid file suffix {suffix!r}")
+        if attempt is not None:
+            return f"{job_id}/{_safe_name(attempt, 'attempt')}/{kind}{suffix}"
         return f"{job_id}/{kind}{suffix}"
 
     def path(self, relative_path: str) -> Path:
@@ -111,16 +121,18 @@ class ArtifactStore:
         src: str | os.PathLike[str] | bytes | BinaryIO,
         *,
         suffix: str | None = None,
+        attempt: str | None = None,
     ) -> StoredFile:
         """Store ``src`` (a file path, bytes, or a binary stream) atomically as a job artifact.
 
         ``suffix`` defaults to the source file's suffix, else by kind (``.rrd`` for
-        ``recording``, ``.csv`` for ``csv``, ``.bin`` otherwise). Storing the same kind again
-        replaces the file atomically. Returns ``(relative_path, sha256, size_bytes)``.
+        ``recording``, ``.csv`` for ``csv``, ``.bin`` otherwise); ``attempt`` puts it in that
+        attempt's directory. Storing the same kind again replaces the file atomically.
+        Returns ``(relative_path, sha256, size_bytes)``.
         """
         if suffix is None and isinstance(src, str | os.PathLike):
             suffix = Path(src).suffix or None
-        rel = self.relative_path(job_id, kind, suffix)
+        rel = self.relative_path(job_id, kind, suffix, attempt)
         target = self.path(rel)
         target.parent.mkdir(parents=True, exist_ok=True)
         digest = hashlib.sha256()
@@ -181,6 +193,22 @@ class ArtifactStore:
     def exists(self, relative_path: str) -> bool:
         """True if the file is stored."""
         return self.path(relative_path).is_file()
+
+    def delete_attempt(self, job_id: str, attempt: str) -> None:
+        """Remove the files one attempt wrote (a worker that lost its lease cleans up)."""
+        directory = self.path(f"{_safe_name(job_id, 'job id')}/{_safe_name(attempt, 'attempt')}")
+        shutil.rmtree(directory, ignore_errors=True)
+
+    def prune_attempts(self, job_id: str, keep: str) -> None:
+        """Remove the attempt directories of a job other than ``keep`` (left by workers that
+        died before finishing); called by the lease holder after its files became the job's."""
+        directory = self.path(_safe_name(job_id, "job id"))
+        keep = _safe_name(keep, "attempt")
+        if not directory.is_dir():
+            return
+        for child in directory.iterdir():
+            if child.is_dir() and not child.is_symlink() and child.name != keep:
+                shutil.rmtree(child, ignore_errors=True)
 
     def delete_job(self, job_id: str) -> None:
         """Remove every artifact of a job (no error if it has none)."""

@@ -5,11 +5,12 @@ A worker owns a running job through its *lease*: ``lease_owner`` (the worker id)
 expected state, so two workers (or a re-delivered Celery message) can never both win:
 
 - ``claim_job``: queued -> running, or running with an expired lease -> running (attempt + 1);
-- ``heartbeat``: extends the lease, only for the lease owner;
+- ``heartbeat`` / ``renew_lease``: extends the lease, only for the lease owner (``renew_lease``
+  also answers ``cancel_requested``, so a worker needs no query per generation to cancel);
 - ``finish_job`` / ``fail_job`` / ``mark_cancelled``: running -> terminal, only for the owner;
 - ``requeue_expired``: running with an expired lease -> queued (or failed / cancelled).
 
-Worker writes (``record_generation``, ``save_checkpoint``, ``finish_job``, ``fail_job``,
+Worker writes (``record_generation(s)``, ``save_checkpoint``, ``finish_job``, ``fail_job``,
 ``mark_cancelled``) raise ``LeaseLostError`` when the caller no longer owns the lease, and then
 write nothing; ``heartbeat`` returns False and ``claim_job`` returns None instead.
 Each function starts with its write statement, so on SQLite it takes the write lock first.
@@ -33,10 +34,13 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from services.store.errors import LeaseLostError
+from services.store.events import add_events
+from services.store.front_codec import encode_front
 from services.store.records import (
     ArtifactIn,
     BaselineIn,
     CheckpointRecord,
+    GenerationIn,
     JobRecord,
     ParetoPointIn,
     ReapReport,
@@ -51,6 +55,7 @@ from services.store.tables import (
     JOBS,
     PARETO_POINTS,
     RESULTS,
+    JobEventKind,
     JobStatus,
 )
 from services.store.types import UTCDateTime
@@ -119,30 +124,47 @@ def claim_job(
             heartbeat_at=now,
             attempt_count=JOBS.c.attempt_count + 1,
             started_at=func.coalesce(JOBS.c.started_at, literal(now, UTCDateTime())),
+            dispatch_due_at=None,
         )
     )
     if rowcount(session.execute(stmt)) == 0:
         return None
-    return get_job(session, job_id)
+    job = get_job(session, job_id)
+    assert job is not None
+    add_events(
+        session, JobEventKind.CLAIMED, [job_id], actor=worker_id, attempts=[job.attempt_count],
+        now=now,
+    )  # fmt: skip
+    return job
 
 
 def heartbeat(
     session: Session, job_id: str, worker_id: str, lease_s: float, *, now: datetime | None = None
 ) -> bool:
     """Extend the lease to ``now + lease_s``; False if ``worker_id`` no longer owns the job."""
+    return renew_lease(session, job_id, worker_id, lease_s, now=now) is not None
+
+
+def renew_lease(
+    session: Session, job_id: str, worker_id: str, lease_s: float, *, now: datetime | None = None
+) -> bool | None:
+    """``heartbeat`` that also answers whether cancellation was requested, in the same UPDATE:
+    None if ``worker_id`` no longer owns the job, else the job's ``cancel_requested``."""
     now = now_utc(now)
     stmt = (
         update(JOBS)
         .where(_owned_by(job_id, worker_id))
         .values(lease_expires_at=_lease_until(now, lease_s), heartbeat_at=now)
+        .returning(JOBS.c.cancel_requested)
     )
-    return rowcount(session.execute(stmt)) > 0
+    flag = session.execute(stmt).first()
+    return None if flag is None else bool(flag[0])
 
 
 # --------------------------------------------------------------------------- progress
 
 
-def _insert_ignoring_duplicates(
+def insert_ignoring_duplicates(
     session: Session, table: Table, values: dict[str, Any], keys: Sequence[str]
 ) -> bool:
     """INSERT unless a row with the same ``keys`` exists; True if a row was inserted."""
@@ -153,7 +175,7 @@ def _insert_ignoring_duplicates(
             module.insert(table)
             .values(**values)
             .on_conflict_do_nothing(index_elements=keys)
-            .returning(table.c.id)
+            .returning(table.c[keys[0]])
         )
         return session.execute(stmt).first() is not None
     try:
@@ -193,8 +215,8 @@ def record_generation(
 ) -> bool:
     """Record one generation and advance the job's progress; idempotent per generation.
 
-    ``front`` (optional, JSON) is the objective vectors of the current front, kept for the
-    recording's per-generation Pareto view.
+    ``front`` (optional, (k, m) array-like) is the objective vectors of the current front, kept
+    (as float64 bytes) for the recording's per-generation Pareto view.
 
     ``best`` is the best objective(s) so far (a number or a list, JSON); it also becomes the
     job's ``best_objective`` unless a later generation was already recorded. A generation that
@@ -210,21 +232,68 @@ def record_generation(
     )
     if rowcount(session.execute(advance)) == 0:
         _check_owner(session, job_id, worker_id)  # owner, but a later generation is recorded
-    return _insert_ignoring_duplicates(
-        session,
-        GENERATIONS,
-        {
-            "job_id": job_id,
-            "generation": generation,
-            "n_evals": int(n_evals),
-            "best": best,
-            "hypervolume": _finite_or_none(hypervolume),
-            "wall_time_s": float(wall_time_s),
-            "created_at": now,
-            "front": front,
-        },
-        ("job_id", "generation"),
+    row = GenerationIn(generation, n_evals, best, wall_time_s, hypervolume, front)
+    return insert_ignoring_duplicates(
+        session, GENERATIONS, _generation_row(job_id, row, now), ("job_id", "generation")
     )
+
+
+def _generation_row(job_id: str, g: GenerationIn, now: datetime) -> dict[str, Any]:
+    return {
+        "job_id": job_id,
+        "generation": int(g.generation),
+        "n_evals": int(g.n_evals),
+        "best": g.best,
+        "hypervolume": _finite_or_none(g.hypervolume),
+        "wall_time_s": float(g.wall_time_s),
+        "created_at": now,
+        "front_packed": encode_front(g.front),
+    }
+
+
+def record_generations(
+    session: Session,
+    job_id: str,
+    worker_id: str,
+    rows: Sequence[GenerationIn],
+    *,
+    now: datetime | None = None,
+) -> bool:
+    """Record a batch of generations at once (``record_generation`` for many rows: one UPDATE
+    of the job's progress, one multi-row INSERT); returns the job's ``cancel_requested``, read
+    by the same UPDATE, so a worker needs no query of its own to notice a cancellation.
+
+    Generations already recorded (a resumed job re-running them) are skipped. Raises
+    LeaseLostError, writing nothing, if ``worker_id`` lost the lease.
+    """
+    now = now_utc(now)
+    owned = _owned_by(job_id, worker_id)
+    flag = None
+    if rows:
+        last = max(rows, key=lambda g: int(g.generation))
+        advance = (
+            update(JOBS)
+            .where(owned, JOBS.c.progress_generation <= int(last.generation))
+            .values(progress_generation=int(last.generation), best_objective=last.best)
+            .returning(JOBS.c.cancel_requested)
+        )
+        flag = session.execute(advance).first()
+    if flag is None:  # nothing to advance, or a later generation is recorded: is it still ours?
+        flag = session.execute(select(JOBS.c.cancel_requested).where(owned)).first()
+        if flag is None:
+            raise LeaseLostError(f"worker {worker_id!r} does not hold the lease of job {job_id}")
+    values = [_generation_row(job_id, g, now) for g in rows]
+    dialect = session.get_bind().dialect.name
+    if values and dialect in ("sqlite", "postgresql"):
+        module = sqlite if dialect == "sqlite" else postgresql
+        stmt = module.insert(GENERATIONS).on_conflict_do_nothing(
+            index_elements=["job_id", "generation"]
+        )
+        session.execute(stmt, values)
+    else:
+        for v in values:
+            insert_ignoring_duplicates(session, GENERATIONS, v, ("job_id", "generation"))
+    return bool(flag[0])
 
 
 def save_checkpoint(
@@ -251,7 +320,7 @@ def save_checkpoint(
         .values(generation=generation, state=bytes(state), created_at=now)
     )
     if rowcount(replaced) == 0:
-        _insert_ignoring_duplicates(
+        insert_ignoring_duplicates(
             session,
             CHECKPOINTS,
             {"job_id": job_id, "generation": generation, "state": bytes(state), "created_at": now},
@@ -278,16 +347,23 @@ def request_cancel(
     """Ask for a job to stop; the job afterwards, or None if missing (or another owner's).
 
     A queued job is cancelled at once; a running job gets ``cancel_requested`` and its worker
-    stops at the next generation (``is_cancel_requested`` then ``mark_cancelled``); a finished
-    job is left as it is.
+    stops after its next progress write or heartbeat (``record_generations`` and
+    ``renew_lease`` answer the flag, then ``mark_cancelled``); a finished job is left as it is.
     """
     now = now_utc(now)
     owner = [] if owner_key_id is None else [JOBS.c.owner_key_id == owner_key_id]
-    session.execute(
+    cancelled = session.execute(
         update(JOBS)
         .where(JOBS.c.id == job_id, JOBS.c.status == JobStatus.QUEUED, *owner)
-        .values(status=JobStatus.CANCELLED, cancel_requested=True, finished_at=now)
-    )
+        .values(
+            status=JobStatus.CANCELLED,
+            cancel_requested=True,
+            finished_at=now,
+            dispatch_due_at=None,
+        )
+        .returning(JOBS.c.id)
+    ).scalars().all()
+    add_events(session, JobEventKind.CANCELLED, cancelled, detail="cancelled while queued", now=now)
     session.execute(
         update(JOBS)
         .where(JOBS.c.id == job_id, JOBS.c.status == _RUNNING, *owner)
@@ -306,7 +382,13 @@ def is_cancel_requested(session: Session, job_id: str) -> bool:
 
 
 def _terminal_values(status: JobStatus, now: datetime, **extra: Any) -> dict[str, Any]:
-    return {"status": status, "finished_at": now, "lease_expires_at": None, **extra}
+    return {
+        "status": status,
+        "finished_at": now,
+        "lease_expires_at": None,
+        "dispatch_due_at": None,
+        **extra,
+    }
 
 
 def mark_cancelled(
@@ -318,6 +400,7 @@ def mark_cancelled(
     """
     now = now_utc(now)
     _require_owner(session, job_id, worker_id, _terminal_values(JobStatus.CANCELLED, now))
+    add_events(session, JobEventKind.CANCELLED, [job_id], actor=worker_id, now=now)
     record = get_job(session, job_id)
     assert record is not None
     return record
@@ -349,6 +432,10 @@ def fail_job(
         )
         if rowcount(session.execute(stmt)) == 0:
             raise LeaseLostError(f"job {job_id} is missing or already finished")
+    add_events(
+        session, JobEventKind.FAILED, [job_id], actor=worker_id, detail=str(message)[:2000],
+        now=now,
+    )  # fmt: skip
     record = get_job(session, job_id)
     assert record is not None
     return record
@@ -429,6 +516,7 @@ def finish_job(
         ]
         if rows:
             session.execute(insert(ARTIFACTS), rows)
+        add_events(session, JobEventKind.SUCCEEDED, [job_id], actor=worker_id, now=now)
     record = get_job(session, job_id)
     assert record is not None
     return record
@@ -444,14 +532,19 @@ def expired_leases(session: Session, now: datetime | None = None) -> tuple[str, 
 
 
 def requeue_expired(
-    session: Session, now: datetime | None = None, *, max_attempts: int | None = None
+    session: Session,
+    now: datetime | None = None,
+    *,
+    max_attempts: int | None = None,
+    actor: str | None = None,
 ) -> ReapReport:
     """Put running jobs with an expired lease back to queued; returns what happened to whom.
 
     Jobs whose cancellation was requested become cancelled; with ``max_attempts``, jobs
     already claimed that many times become failed (a job that keeps killing its worker).
-    The caller re-sends a queue message for each requeued id. Each step is one conditional
-    UPDATE, so a concurrent ``claim_job`` or ``heartbeat`` cannot be overwritten.
+    Requeued jobs are due for dispatch at once (in this transaction), so their message is sent
+    by whoever dispatches next, once. Each step is one conditional UPDATE, so a concurrent
+    ``claim_job`` or ``heartbeat`` cannot be overwritten.
     """
     now = now_utc(now)
 
@@ -462,22 +555,29 @@ def requeue_expired(
     cancelled = _update(
         JOBS.c.cancel_requested.is_(True), _terminal_values(JobStatus.CANCELLED, now)
     )
+    add_events(session, JobEventKind.CANCELLED, cancelled, actor=actor, now=now)
     failed: tuple[str, ...] = ()
     if max_attempts is not None:
+        message = (
+            f"the worker running this job stopped responding {max_attempts} times "
+            "(lease expired); it may need more memory or time: reduce the population, "
+            "generations or samples, or raise the worker limits"
+        )
         failed = _update(
             JOBS.c.attempt_count >= max_attempts,
-            _terminal_values(
-                JobStatus.FAILED,
-                now,
-                error_message=(
-                    f"the worker running this job stopped responding {max_attempts} times "
-                    "(lease expired); it may need more memory or time: reduce the population, "
-                    "generations or samples, or raise the worker limits"
-                ),
-            ),
+            _terminal_values(JobStatus.FAILED, now, error_message=message),
         )
+        add_events(session, JobEventKind.FAILED, failed, actor=actor, detail=message, now=now)
     requeued = _update(
         JOBS.c.id.is_not(None),
-        {"status": JobStatus.QUEUED, "lease_owner": None, "lease_expires_at": None},
+        {
+            "status": JobStatus.QUEUED,
+            "lease_owner": None,
+            "lease_expires_at": None,
+            "dispatch_due_at": now,
+        },
+    )
+    add_events(
+        session, JobEventKind.REQUEUED, requeued, actor=actor, detail="lease expired", now=now
     )
     return ReapReport(requeued=requeued, failed=failed, cancelled=cancelled)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Generic, TypeVar
 
-from services.store.tables import JobStatus, RobotSource
+from services.store.tables import JobEventKind, JobStatus, KeyRole, RobotSource
 
 T = TypeVar("T")
 
@@ -29,11 +29,30 @@ class Page(Generic[T]):
 
 @dataclass(frozen=True, slots=True)
 class ApiKeyRecord:
-    """An API key (the hash stays in the store)."""
+    """An API key (the hash stays in the store), its role, validity and quotas."""
 
     id: str
     name: str
     created_at: datetime
+    role: KeyRole
+    expires_at: datetime | None
+    revoked_at: datetime | None
+    max_active_jobs: int | None
+    max_cpu_seconds_per_hour: float | None
+    max_storage_bytes: int | None
+
+    @property
+    def is_admin(self) -> bool:
+        """True for an admin key (may manage keys)."""
+        return self.role is KeyRole.ADMIN
+
+    def invalid_reason(self, now: datetime) -> str | None:
+        """Why the key may not be used at ``now`` (revoked, expired), or None."""
+        if self.revoked_at is not None:
+            return f"API key {self.name!r} was revoked at {self.revoked_at.isoformat()}"
+        if self.expires_at is not None and self.expires_at <= now:
+            return f"API key {self.name!r} expired at {self.expires_at.isoformat()}"
+        return None
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,13 +80,18 @@ class SweepRecord:
 
 @dataclass(frozen=True, slots=True)
 class JobRecord:
-    """A job row: spec, lifecycle, lease and progress."""
+    """A job row: spec, lifecycle, lease, progress and dispatch.
+
+    ``spec`` is None for a job of a sweep, which stores only its ``overrides`` of the sweep's
+    base spec: read its spec with ``repository.job_spec``.
+    """
 
     id: str
     owner_key_id: str
     sweep_id: str | None
     status: JobStatus
     spec: Any
+    overrides: Any
     progress_generation: int
     total_generations: int
     best_objective: Any
@@ -81,6 +105,10 @@ class JobRecord:
     created_at: datetime
     started_at: datetime | None
     finished_at: datetime | None
+    cpu_seconds: float = 0.0
+    dispatch_due_at: datetime | None = None
+    last_dispatch_at: datetime | None = None
+    dispatch_count: int = 0
 
     @property
     def is_terminal(self) -> bool:
@@ -165,6 +193,30 @@ class ArtifactRecord:
 
 
 @dataclass(frozen=True, slots=True)
+class JobEventRecord:
+    """One state change of a job (``job_events``)."""
+
+    job_id: str
+    at: datetime
+    kind: JobEventKind
+    attempt: int
+    actor: str | None
+    detail: str | None
+
+
+@dataclass(frozen=True, slots=True)
+class IdempotencyRecord:
+    """What a POST with an ``Idempotency-Key`` created (``resource_kind``: job or sweep)."""
+
+    owner_key_id: str
+    key: str
+    request_sha256: str
+    resource_kind: str
+    resource_id: str
+    created_at: datetime
+
+
+@dataclass(frozen=True, slots=True)
 class ReapReport:
     """What ``requeue_expired`` did with the jobs whose lease had expired."""
 
@@ -173,7 +225,20 @@ class ReapReport:
     cancelled: tuple[str, ...]
 
 
-# Inputs of ``finish_job`` (the worker builds these; JSON fields may hold numpy values).
+# Inputs of the worker's writes (the worker builds these; JSON fields may hold numpy values).
+
+
+@dataclass(frozen=True, slots=True)
+class GenerationIn:
+    """One generation's progress for ``record_generations`` (``front``: (k, m) objective
+    vectors or None; stored as float64 bytes, see ``services.store.front_codec``)."""
+
+    generation: int
+    n_evals: int
+    best: Any
+    wall_time_s: float
+    hypervolume: float | None = None
+    front: Any = None
 
 
 @dataclass(frozen=True, slots=True)

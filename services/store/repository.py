@@ -13,16 +13,17 @@ reads as missing (the API answers 404 rather than 403, so ids of others do not l
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import fields
-from datetime import datetime
+from datetime import datetime, timedelta
 from typing import Any, TypeVar
 
-from sqlalchemy import ColumnElement, Select, Table, delete, func, insert, select
+from sqlalchemy import ColumnElement, Select, Table, delete, func, insert, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from services.store.errors import ConflictError
+from services.store.front_codec import decode_front
 from services.store.records import (
     ApiKeyRecord,
     ArtifactRecord,
@@ -45,7 +46,9 @@ from services.store.tables import (
     RESULTS,
     ROBOTS,
     SWEEPS,
+    JobEventKind,
     JobStatus,
+    KeyRole,
     RobotSource,
     new_id,
 )
@@ -132,19 +135,53 @@ def _owned(table: Table, owner_key_id: str | None) -> list[ColumnElement[bool]]:
 
 
 def create_api_key(
-    session: Session, *, name: str, key_hash: str, now: datetime | None = None
+    session: Session,
+    *,
+    name: str,
+    key_hash: str,
+    role: KeyRole | str = KeyRole.USER,
+    expires_at: datetime | None = None,
+    max_active_jobs: int | None = None,
+    max_cpu_seconds_per_hour: float | None = None,
+    max_storage_bytes: int | None = None,
+    now: datetime | None = None,
 ) -> ApiKeyRecord:
-    """Store a new API key by its hash (``keys.hash_api_key``); ConflictError if the hash exists."""
+    """Store a new API key by its hash (``keys.hash_api_key``); ConflictError if the hash exists.
+
+    ``role``: ``user`` or ``admin``; ``expires_at``: after it the key is refused; the ``max_*``
+    quotas override the settings' defaults for this key.
+    """
     key_id = new_id()
     insert_or_conflict(
         session,
         API_KEYS,
-        {"id": key_id, "name": name, "key_hash": key_hash, "created_at": now_utc(now)},
+        {
+            "id": key_id,
+            "name": name,
+            "key_hash": key_hash,
+            "created_at": now_utc(now),
+            "role": KeyRole(role),
+            "expires_at": None if expires_at is None else as_utc(expires_at),
+            "max_active_jobs": max_active_jobs,
+            "max_cpu_seconds_per_hour": max_cpu_seconds_per_hour,
+            "max_storage_bytes": max_storage_bytes,
+        },
         "an API key with this hash already exists",
     )
     record = get_api_key(session, key_id)
     assert record is not None
     return record
+
+
+def revoke_api_key(session: Session, key_id: str, *, now: datetime | None = None) -> bool:
+    """Mark a key revoked (it is refused from now on; its resources stay). True if it existed
+    and was not revoked yet."""
+    stmt = (
+        update(API_KEYS)
+        .where(API_KEYS.c.id == key_id, API_KEYS.c.revoked_at.is_(None))
+        .values(revoked_at=now_utc(now))
+    )
+    return rowcount(session.execute(stmt)) > 0
 
 
 def get_api_key(session: Session, key_id: str) -> ApiKeyRecord | None:
@@ -299,32 +336,131 @@ def create_job(
     warnings: Iterable[str] = (),
     now: datetime | None = None,
 ) -> JobRecord:
-    """Store a queued job. Send its id to the queue only after the scope has committed."""
-    job_id = new_id()
-    session.execute(
-        insert(JOBS).values(
-            id=job_id,
-            owner_key_id=owner_key_id,
-            sweep_id=sweep_id,
-            status=JobStatus.QUEUED,
-            spec=spec,
-            progress_generation=0,
-            total_generations=int(total_generations),
-            attempt_count=0,
-            cancel_requested=False,
-            warnings=[str(w) for w in warnings],
-            created_at=now_utc(now),
-        )
+    """Store a queued job, due for dispatch (its ``submitted`` event in the same transaction).
+
+    The queue message is sent after the commit (``services.store.dispatch``); if that never
+    happens (the process died, the broker was down) the dispatcher sends it.
+    """
+    (job_id,) = create_jobs(
+        session,
+        owner_key_id=owner_key_id,
+        specs=[spec],
+        total_generations=[total_generations],
+        sweep_id=sweep_id,
+        warnings=warnings,
+        now=now,
     )
     record = get_job(session, job_id)
     assert record is not None
     return record
 
 
+def create_jobs(
+    session: Session,
+    *,
+    owner_key_id: str,
+    specs: Sequence[Any] | None = None,
+    overrides: Sequence[Mapping[str, Any]] | None = None,
+    total_generations: Sequence[int],
+    sweep_id: str | None = None,
+    warnings: Iterable[str] = (),
+    now: datetime | None = None,
+) -> list[str]:
+    """Store several queued jobs in one INSERT; their ids in order.
+
+    Give either whole ``specs`` or, for the jobs of sweep ``sweep_id``, their ``overrides`` of
+    the sweep's base spec (the spec is then stored once, in the sweep).
+    """
+    from services.store.events import add_events
+    from services.store.specs import json_size
+
+    if (specs is None) == (overrides is None):
+        raise ValueError("give either specs or overrides")
+    if overrides is not None and sweep_id is None:
+        raise ValueError("overrides need the sweep_id whose base spec they modify")
+    docs: Sequence[Any] = specs if specs is not None else overrides  # type: ignore[assignment]
+    if len(docs) != len(total_generations):
+        raise ValueError("one total_generations per job")
+    at = now_utc(now)
+    notes = [str(w) for w in warnings]
+    rows = []
+    for i, (doc, total) in enumerate(zip(docs, total_generations, strict=True)):
+        rows.append(
+            {
+                "id": new_id(),
+                "owner_key_id": owner_key_id,
+                "sweep_id": sweep_id,
+                "status": JobStatus.QUEUED,
+                "spec": doc if specs is not None else None,
+                "overrides": dict(doc) if overrides is not None else None,
+                "spec_bytes": json_size(doc),
+                "progress_generation": 0,
+                "total_generations": int(total),
+                "attempt_count": 0,
+                "cancel_requested": False,
+                "warnings": notes,
+                # one microsecond apart: listings ordered by creation keep the given order
+                "created_at": at + timedelta(microseconds=i),
+                "dispatch_due_at": at,
+                "dispatch_count": 0,
+                "cpu_seconds": 0.0,
+            }
+        )
+    if rows:
+        session.execute(insert(JOBS), rows)
+    ids = [str(r["id"]) for r in rows]
+    add_events(session, JobEventKind.SUBMITTED, ids, attempts=[0] * len(ids), now=at)
+    return ids
+
+
+def job_labels(session: Session, jobs: Iterable[JobRecord]) -> dict[str, dict[str, Any]]:
+    """``{job_id: {"name": ..., "problem": {"kind": ...}}}``: the spec fields a listing shows,
+    read for the jobs of sweeps from their sweep's base and overrides without building specs."""
+    from services.store.specs import spec_value
+
+    jobs = list(jobs)
+    sweep_ids = {j.sweep_id for j in jobs if j.spec is None and j.sweep_id is not None}
+    bases: dict[str, Any] = {}
+    if sweep_ids:
+        rows = session.execute(
+            select(SWEEPS.c.id, SWEEPS.c.base_spec).where(SWEEPS.c.id.in_(sweep_ids))
+        )
+        bases = {r[0]: r[1] for r in rows}
+    labels: dict[str, dict[str, Any]] = {}
+    for job in jobs:
+        base = job.spec if job.spec is not None else bases.get(job.sweep_id or "", {})
+        overrides = None if job.spec is not None else job.overrides
+        labels[job.id] = {
+            "name": spec_value(base, overrides, "name"),
+            "problem": {"kind": spec_value(base, overrides, "problem.kind")},
+            "record": spec_value(base, overrides, "record"),
+        }
+    return labels
+
+
+def job_spec(session: Session, job: JobRecord) -> Any:
+    """The spec document of a job: its own, or its sweep's base with its overrides applied."""
+    if job.spec is not None or job.sweep_id is None:
+        return copy.deepcopy(job.spec)
+    from services.store.specs import apply_overrides
+
+    base = session.execute(
+        select(SWEEPS.c.base_spec).where(SWEEPS.c.id == job.sweep_id)
+    ).scalar_one_or_none()
+    return apply_overrides(base or {}, job.overrides or {})
+
+
 def get_job(session: Session, job_id: str, *, owner_key_id: str | None = None) -> JobRecord | None:
     """The job with this id (of this owner when given), or None."""
     stmt = select(JOBS).where(JOBS.c.id == job_id, *_owned(JOBS, owner_key_id))
     return fetch_one(session, JobRecord, stmt)
+
+
+def delete_job(session: Session, job_id: str, *, owner_key_id: str | None = None) -> bool:
+    """Delete a job and its rows (cascade); True if it existed. Its files are the caller's to
+    remove (``ArtifactStore.delete_job``) after the commit."""
+    stmt = delete(JOBS).where(JOBS.c.id == job_id, *_owned(JOBS, owner_key_id))
+    return rowcount(session.execute(stmt)) > 0
 
 
 def _statuses(status: JobStatus | str | Iterable[JobStatus | str]) -> list[JobStatus]:
@@ -380,7 +516,12 @@ def list_generations(
     if after is not None:
         stmt = stmt.where(GENERATIONS.c.generation > after)
     stmt = stmt.order_by(GENERATIONS.c.generation).limit(limit)
-    return fetch_all(session, GenerationRecord, stmt)
+    records = []
+    for row in session.execute(stmt).mappings():
+        packed = row["front_packed"]
+        values = dict(row) if packed is None else {**row, "front": decode_front(packed)}
+        records.append(to_record(GenerationRecord, values))
+    return tuple(records)
 
 
 def get_result(session: Session, job_id: str) -> ResultRecord | None:
@@ -445,9 +586,11 @@ __all__ = [
     "count_jobs_by_status",
     "create_api_key",
     "create_job",
+    "create_jobs",
     "create_robot",
     "create_sweep",
     "delete_api_key",
+    "delete_job",
     "delete_robot",
     "get_api_key",
     "get_api_key_by_hash",
@@ -457,6 +600,8 @@ __all__ = [
     "get_robot",
     "get_robot_by_name",
     "get_sweep",
+    "job_labels",
+    "job_spec",
     "list_api_keys",
     "list_artifacts",
     "list_baselines",
@@ -465,4 +610,5 @@ __all__ = [
     "list_pareto",
     "list_robots",
     "list_sweeps",
+    "revoke_api_key",
 ]

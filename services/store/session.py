@@ -121,6 +121,11 @@ class _ProcessEngine:
     A child process (Celery prefork, multiprocessing) must not use connections opened by its
     parent, so when the pid changes the inherited pool is dropped without closing the parent's
     connections (``dispose(close=False)``) and a new engine is made.
+
+    No lock is held across a fork: a thread of the parent (the dispatcher, a heartbeat) may
+    hold ``_lock`` at the instant billiard forks a pool child, and the child — which has only
+    the forking thread — would then wait for it forever. ``os.register_at_fork`` gives the child
+    a fresh lock and forgets the parent's engine (never touching its pool or connections).
     """
 
     def __init__(self) -> None:
@@ -128,6 +133,11 @@ class _ProcessEngine:
         self._pid: int | None = None
         self._engine: Engine | None = None
         self._factory: sessionmaker[Session] | None = None
+
+    def after_fork_in_child(self) -> None:
+        """Called in a forked child: fresh lock, no inherited engine (see the class doc)."""
+        self._lock = threading.Lock()
+        self._pid = self._engine = self._factory = None
 
     def get(self) -> tuple[Engine, sessionmaker[Session]]:
         with self._lock:
@@ -147,6 +157,8 @@ class _ProcessEngine:
 
 
 _PROCESS = _ProcessEngine()
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_PROCESS.after_fork_in_child)
 
 
 def get_engine() -> Engine:

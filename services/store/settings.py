@@ -10,6 +10,7 @@ a SQLite file, an artifact directory and a filesystem broker, all under ``./lego
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from collections.abc import Mapping
 from functools import lru_cache
@@ -62,6 +63,19 @@ class Settings(BaseModel):
         description="Max population x generations x samples of one job.",
     )
 
+    worker_memory_limit_mb: int = Field(
+        default=2_048,
+        gt=0,
+        description="Max predicted peak memory of one job in a worker process, MiB "
+        "(legcore.memory.predicted_peak_bytes; evaluations are chunked to fit).",
+    )
+
+    worker_warmup: bool = Field(
+        default=True,
+        description="A worker process loads every compiled kernel (legcore.warmup: one tiny "
+        "job per study kind) before it takes its first job, so that job runs warm.",
+    )
+
     # Leases of running jobs.
     lease_seconds: float = Field(default=60.0, gt=0, description="Lease length of a claim.")
     heartbeat_seconds: float = Field(default=15.0, gt=0, description="Heartbeat period.")
@@ -70,6 +84,39 @@ class Settings(BaseModel):
     )
     checkpoint_every: int = Field(
         default=5, gt=0, description="Generations between two checkpoints of a running job."
+    )
+    dispatch_period_s: float = Field(
+        default=1.0,
+        gt=0,
+        description="Seconds between two passes of the elected dispatcher (requeue expired "
+        "leases, send due queue messages, re-send lost ones).",
+    )
+    worker_max_memory_mb: int = Field(
+        default=0,
+        ge=0,
+        description="A worker process whose resident memory exceeds this after a job is "
+        "replaced by a fresh one (0: never).",
+    )
+
+    # Per-API-key quotas (defaults; a key may carry its own, see ``api_keys``).
+    quota_active_jobs: int = Field(
+        default=2_000, gt=0, description="Max queued + running jobs of one API key."
+    )
+    quota_cpu_seconds_per_hour: float = Field(
+        default=36_000.0,
+        gt=0,
+        description="Max worker CPU seconds used by one API key's jobs per UTC clock hour.",
+    )
+    quota_storage_bytes: int = Field(
+        default=10 * 1024**3,
+        gt=0,
+        description="Max bytes stored for one API key (artifacts and specs).",
+    )
+    rate_limit_per_s: float = Field(
+        default=50.0, gt=0, description="Sustained requests per second per API key."
+    )
+    rate_limit_burst: int = Field(
+        default=500, gt=0, description="Requests one API key may make at once before limiting."
     )
     sqlite_busy_timeout_ms: int = Field(
         default=30_000, ge=0, description="SQLite busy_timeout of every connection."
@@ -108,12 +155,39 @@ class Settings(BaseModel):
         return self.data_dir / "broker"
 
     @property
+    def cache_dir(self) -> Path:
+        """Folder of persistent caches: compiled numba kernels (``numba/``, unless
+        ``NUMBA_CACHE_DIR`` is set) and seed 000 baselines (``baselines/``, unless
+        ``LEGOPT_CACHE_DIR`` is set) — see :meth:`cache_environment`."""
+        return self.data_dir / "cache"
+
+    def cache_environment(self) -> dict[str, str]:
+        """Environment variables that make a worker start warm (issue 12): ``LEGOPT_CACHE_DIR``
+        (``legcore.result_cache``) and, when the installed legcore package is not writable
+        (numba's default cache is its ``__pycache__``), ``NUMBA_CACHE_DIR`` (numba reads it
+        once, on import: set it before legcore is imported). Values already in the environment
+        (e.g. the image's ahead-of-time kernel cache) win: ``services.embedded.worker_env``
+        and ``services.worker.celery_app`` use ``setdefault``."""
+        env = {"LEGOPT_CACHE_DIR": str(self.cache_dir.absolute())}
+        spec = importlib.util.find_spec("legcore")
+        package = Path(spec.origin).parent if spec is not None and spec.origin else None
+        if package is None or not os.access(package, os.W_OK):  # numba's default: in-tree
+            env["NUMBA_CACHE_DIR"] = str((self.cache_dir / "numba").absolute())
+        return env
+
+    @property
     def is_sqlite(self) -> bool:
         """True when the database is SQLite (embedded mode)."""
         return self.database_url.startswith("sqlite")
 
-    def check_job_size(self, population: int, generations: int, samples: int = 1) -> str | None:
-        """Return why a job of this size is refused, or None when it fits the limits."""
+    def check_job_size(
+        self, population: int, generations: int, samples: int = 1, peak_bytes: int = 0
+    ) -> str | None:
+        """Return why a job of this size is refused, or None when it fits the limits.
+
+        ``peak_bytes``: the job's predicted peak memory (``JobSize.peak_bytes``), checked
+        against ``worker_memory_limit_mb``.
+        """
         if population > self.max_population:
             return f"population {population} exceeds the limit {self.max_population}"
         if generations > self.max_generations:
@@ -123,6 +197,11 @@ class Settings(BaseModel):
         work = population * generations * samples
         if work > self.max_work:
             return f"population x generations x samples = {work} exceeds the limit {self.max_work}"
+        if peak_bytes > self.worker_memory_limit_mb * 1024**2:
+            return (
+                f"memory: predicted peak {peak_bytes / 1024**2:.0f} MiB exceeds the per-worker "
+                f"limit {self.worker_memory_limit_mb} MiB (worker_memory_limit_mb)"
+            )
         return None
 
     def with_overrides(self, **overrides: Any) -> Settings:

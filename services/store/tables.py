@@ -67,6 +67,25 @@ class JobStatus(enum.StrEnum):
         return self in (JobStatus.SUCCEEDED, JobStatus.FAILED, JobStatus.CANCELLED)
 
 
+class KeyRole(enum.StrEnum):
+    """What an API key may do: ``user`` (its own resources) or ``admin`` (also manage keys)."""
+
+    USER = "user"
+    ADMIN = "admin"
+
+
+class JobEventKind(enum.StrEnum):
+    """One state change of a job, as recorded in ``job_events`` (see ``JobEvent``)."""
+
+    SUBMITTED = "submitted"
+    DISPATCHED = "dispatched"
+    CLAIMED = "claimed"
+    REQUEUED = "requeued"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+
+
 class RobotSource(enum.StrEnum):
     """How a stored robot model was given."""
 
@@ -108,6 +127,15 @@ class ApiKey(Base):
     name: Mapped[str] = mapped_column(String(200))
     key_hash: Mapped[str] = mapped_column(String(128), unique=True)
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
+    role: Mapped[KeyRole] = mapped_column(
+        _enum_type(KeyRole, "key_role"), default=KeyRole.USER, server_default=KeyRole.USER.value
+    )
+    expires_at: Mapped[datetime | None]
+    revoked_at: Mapped[datetime | None]
+    # Per-key quotas; NULL: the settings' default (``Settings.quota_*``).
+    max_active_jobs: Mapped[int | None] = mapped_column(Integer)
+    max_cpu_seconds_per_hour: Mapped[float | None] = mapped_column(Float)
+    max_storage_bytes: Mapped[int | None] = mapped_column(BigInteger)
 
 
 class Robot(Base):
@@ -141,13 +169,28 @@ class Sweep(Base):
 
 
 class Job(Base):
-    """One optimisation run: spec, lifecycle, lease of the worker running it, progress."""
+    """One optimisation run: spec, lifecycle, lease of the worker running it, progress.
+
+    A job of a sweep stores only its ``overrides`` (dotted path -> value); its spec is the
+    sweep's ``base_spec`` with them applied (``repository.job_spec``), so a sweep's spec is
+    stored once. A job outside a sweep stores its whole ``spec``.
+
+    Dispatch (the transactional outbox): ``dispatch_due_at`` is when the job's queue message is
+    due to be (re)sent — set in the transaction that creates or requeues the job; a sender
+    claims it with a conditional UPDATE (``services.store.dispatch``) that moves it to the next
+    re-send time, so one message is sent per due time whoever sends it.
+    """
 
     __tablename__ = "jobs"
     __table_args__ = (
         Index(None, "status"),
         Index(None, "owner_key_id"),
         Index(None, "sweep_id"),
+        Index(None, "status", "dispatch_due_at"),
+        # the dashboard's jobs page (services.store.dashboard_queries)
+        Index(None, "owner_key_id", "created_at"),
+        Index(None, "owner_key_id", "status", "created_at"),
+        Index(None, "owner_key_id", "finished_at"),
     )
 
     id: Mapped[str] = mapped_column(String(ID_LENGTH), primary_key=True, default=new_id)
@@ -160,7 +203,9 @@ class Job(Base):
     status: Mapped[JobStatus] = mapped_column(
         _enum_type(JobStatus, "job_status"), default=JobStatus.QUEUED
     )
-    spec: Mapped[Any] = mapped_column(JSONValue())
+    spec: Mapped[Any | None] = mapped_column(JSONValue())
+    overrides: Mapped[Any | None] = mapped_column(JSONValue())
+    spec_bytes: Mapped[int] = mapped_column(BigInteger, default=0, server_default="0")
 
     progress_generation: Mapped[int] = mapped_column(Integer, default=0)
     total_generations: Mapped[int] = mapped_column(Integer, default=0)
@@ -171,9 +216,17 @@ class Job(Base):
     heartbeat_at: Mapped[datetime | None]
     attempt_count: Mapped[int] = mapped_column(Integer, default=0)
     cancel_requested: Mapped[bool] = mapped_column(Boolean, default=False)
+    cpu_seconds: Mapped[float] = mapped_column(Float, default=0.0, server_default="0")
+
+    dispatch_due_at: Mapped[datetime | None]
+    last_dispatch_at: Mapped[datetime | None]
+    dispatch_count: Mapped[int] = mapped_column(Integer, default=0, server_default="0")
 
     error_message: Mapped[str | None] = mapped_column(Text)
     warnings: Mapped[Any] = mapped_column(JSONValue(), default=list)
+    # The point the per-generation hypervolumes are measured against (objective space, the
+    # worker sets it once from the first front: ``services.worker.hypervolume``).
+    hypervolume_ref: Mapped[Any | None] = mapped_column(JSONValue(), default=None)
 
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
     started_at: Mapped[datetime | None]
@@ -194,7 +247,8 @@ class Generation(Base):
     hypervolume: Mapped[float | None] = mapped_column(Float)
     wall_time_s: Mapped[float] = mapped_column(Float)
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
-    front: Mapped[Any | None] = mapped_column(JSONValue(), default=None)
+    front: Mapped[Any | None] = mapped_column(JSONValue(), default=None)  # rows before 0005
+    front_packed: Mapped[bytes | None] = mapped_column(LargeBinary, default=None)
 
 
 class Checkpoint(Base):
@@ -263,6 +317,90 @@ class Artifact(Base):
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
 
 
+class JobEvent(Base):
+    """One state change of a job, written in the transaction that makes it (an audit trail:
+    a job is terminal exactly once, and ``dispatched`` rows count the queue messages sent)."""
+
+    __tablename__ = "job_events"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    job_id: Mapped[str] = mapped_column(String(ID_LENGTH), _job_fk(), index=True)
+    at: Mapped[datetime] = mapped_column(default=utcnow)
+    kind: Mapped[JobEventKind] = mapped_column(_enum_type(JobEventKind, "job_event_kind"))
+    attempt: Mapped[int] = mapped_column(Integer, default=0)
+    actor: Mapped[str | None] = mapped_column(String(200))
+    detail: Mapped[str | None] = mapped_column(Text)
+
+
+class ServiceLease(Base):
+    """A named role held by one process at a time (e.g. the ``dispatcher``), elected through
+    the database: the holder renews ``expires_at``; anyone may take an expired lease."""
+
+    __tablename__ = "service_leases"
+
+    name: Mapped[str] = mapped_column(String(64), primary_key=True)
+    owner: Mapped[str] = mapped_column(String(200))
+    expires_at: Mapped[datetime]
+
+
+class IdempotencyKey(Base):
+    """The resource a POST with an ``Idempotency-Key`` header created, so a retried request
+    returns it instead of creating another (per API key; the request body's hash must match)."""
+
+    __tablename__ = "idempotency_keys"
+    __table_args__ = (UniqueConstraint("owner_key_id", "key"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    owner_key_id: Mapped[str] = mapped_column(
+        String(ID_LENGTH), ForeignKey("api_keys.id", ondelete="CASCADE")
+    )
+    key: Mapped[str] = mapped_column(String(200))
+    request_sha256: Mapped[str] = mapped_column(String(64))
+    resource_kind: Mapped[str] = mapped_column(String(16))
+    resource_id: Mapped[str] = mapped_column(String(ID_LENGTH))
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)
+
+
+class KeyUsage(Base):
+    """CPU seconds spent by the jobs of one API key in one UTC hour (for the hourly quota)."""
+
+    __tablename__ = "key_usage"
+    __table_args__ = (UniqueConstraint("owner_key_id", "hour"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    owner_key_id: Mapped[str] = mapped_column(
+        String(ID_LENGTH), ForeignKey("api_keys.id", ondelete="CASCADE")
+    )
+    hour: Mapped[datetime]
+    cpu_seconds: Mapped[float] = mapped_column(Float, default=0.0)
+
+
+class JobLabel(Base):
+    """What the dashboard lists, filters, sorts and searches jobs by, one row per job: the spec
+    fields a listing shows, read once (a job's spec never changes) by
+    ``services.store.dashboard_queries.sync_labels``, so a page of 10^5 jobs is an indexed
+    query instead of a walk over specs. ``search``: the lower-cased text a search matches."""
+
+    __tablename__ = "job_labels"
+    __table_args__ = (
+        Index(None, "owner_key_id", "created_at"),
+        Index(None, "owner_key_id", "kind", "created_at"),
+    )
+
+    job_id: Mapped[str] = mapped_column(String(ID_LENGTH), _job_fk(), primary_key=True)
+    owner_key_id: Mapped[str] = mapped_column(
+        String(ID_LENGTH), ForeignKey("api_keys.id", ondelete="CASCADE")
+    )
+    created_at: Mapped[datetime]
+    name: Mapped[str | None] = mapped_column(String(200))
+    kind: Mapped[str] = mapped_column(String(64))
+    robot: Mapped[str] = mapped_column(String(200))
+    optimizer: Mapped[str] = mapped_column(String(32))
+    seed: Mapped[int] = mapped_column(BigInteger, default=0)
+    tags: Mapped[str] = mapped_column(Text, default="")
+    search: Mapped[str] = mapped_column(Text, default="")
+
+
 # Core handles on the tables (the repository issues Core statements, see repository.py).
 API_KEYS = cast(Table, ApiKey.__table__)
 ROBOTS = cast(Table, Robot.__table__)
@@ -274,3 +412,8 @@ RESULTS = cast(Table, Result.__table__)
 PARETO_POINTS = cast(Table, ParetoPoint.__table__)
 BASELINES = cast(Table, Baseline.__table__)
 ARTIFACTS = cast(Table, Artifact.__table__)
+JOB_EVENTS = cast(Table, JobEvent.__table__)
+SERVICE_LEASES = cast(Table, ServiceLease.__table__)
+IDEMPOTENCY_KEYS = cast(Table, IdempotencyKey.__table__)
+KEY_USAGE = cast(Table, KeyUsage.__table__)
+JOB_LABELS = cast(Table, JobLabel.__table__)

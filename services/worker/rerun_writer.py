@@ -8,21 +8,30 @@
 What is logged where is decided by the pure :mod:`legcore.recording` (``docs/recording.md``);
 this module turns its items into archetypes:
 
-- scalar series → ``Scalars`` sent column-wise with ``send_columns`` (one call per series, on
-  the ``time`` timeline in s or the ``generation`` sequence timeline), named by a static
-  ``SeriesLines``;
+- scalar series → ``Scalars`` sent column-wise with ``send_columns`` (on the ``time`` timeline
+  in s or the ``generation`` sequence timeline), named by a static ``SeriesLines``; the joints
+  of one signal (``Series.group``, e.g. ``signals/q``) are one entity and one call — a batch of
+  one value per joint at each sample, one named line per joint — so they share their row ids
+  and time stamps (a tiny recording is 2–2.5× smaller than with one entity per joint);
 - poses → ``Transform3D`` columns (translation + unit quaternion xyzw, one ``send_columns``
   call per frame) with static ``TransformAxes3D`` (link frames), ``Capsules3D`` (links) or
   ``Boxes3D`` (the body of a legged robot) in the entity's own frame;
 - the tool/foot point → ``Points3D`` columns; the path, support polygon → ``LineStrips3D``;
   targets → ``Points3D``; obstacles → ``Boxes3D``;
 - the Pareto front per generation → ``Points3D`` (``Points2D`` for two objectives) columns
-  partitioned by generation.
+  partitioned by generation, drawn in the front's own box (a static ``Transform3D`` maps its
+  span to the unit square; values stay true) with named, ticked axes (``optimization/axes``)
+  and the final front also static (``optimization/final_front``), so the Pareto view shows it
+  on the ``time`` timeline too (:mod:`services.worker.front_display`); a merged recording
+  gives each job its colour and name, one box for all fronts and a legend (``jobs/legend``).
 
 Each job gets its own ``RecordingStream`` (never the global one: several jobs may run in one
 process) saving to a temporary file next to ``path``; the file is moved into place with
 ``os.replace`` only after the stream is flushed and closed, so ``path`` is either absent or a
-complete recording. A blueprint (3D view of robot, path and scene; time-series tabs for q, qd,
+complete recording. The stream and its blueprint stream are then freed for good
+(:func:`release_streams`): rerun-sdk would otherwise keep their threads and buffers for the life
+of the process (4 threads, 2-3 MB per recording in a worker or in the API's sweep merges).
+A blueprint (3D view of robot, path and scene; time-series tabs for q, qd,
 qdd, jerk, τ, power, energy, the best objective per generation; the front) is saved with it.
 
 Replay: a stored ``.rrd`` opens in the native viewer (``rerun FILE``) or, where there is no
@@ -45,7 +54,7 @@ import time
 import urllib.error
 import urllib.request
 import uuid
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -54,6 +63,7 @@ from urllib.parse import quote
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+import rerun_bindings
 from rerun.chunk import RrdReader
 
 from legcore import recording as lrec
@@ -66,6 +76,7 @@ from legcore.recording import (
     Series,
     record_run,
 )
+from services.worker.front_display import FrontDisplay, front_display
 
 if TYPE_CHECKING:
     from legcore.robots.legged import LeggedRobot
@@ -113,19 +124,27 @@ def write_recording(
     max_samples: int = DEFAULT_MAX_SAMPLES,
     fronts: Mapping[int, Any] | Sequence[tuple[int, Any]] | None = None,
     robot: Robot | LeggedRobot | None = None,
-) -> None:
-    """Write the Rerun recording of a finished job to ``path`` (``.rrd``).
+    mesh_roots: lrec.MeshRoots = (),
+) -> list[str]:
+    """Write the Rerun recording of a finished job to ``path`` (``.rrd``); return its notes
+    (what it could not show as asked, e.g. a URDF mesh not read) for the job's warnings.
 
     ``recording_id``: the recording's id (the job id; a fresh UUID by default).
     ``max_samples``: display cap per signal / pose track (see :mod:`legcore.recording`).
     ``fronts``: optional Pareto front per generation ``{generation: F (k, m)}``; without it the
     final front is logged at the last generation. ``robot``: override the robot drawn.
+    ``mesh_roots``: the only directories URDF mesh files may be read from (see
+    :func:`legcore.recording.record_run`); the default, none, opens no file — what the worker
+    passes for every job, so an uploaded robot's mesh names are never opened.
 
     Written to a temporary file next to ``path`` and moved into place only once the stream is
     closed; on any error the temporary file is removed and ``path`` is left untouched.
     """
-    rec = record_run(result, robot=robot, fronts=fronts, max_samples=max_samples)
+    rec = record_run(
+        result, robot=robot, fronts=fronts, max_samples=max_samples, mesh_roots=mesh_roots
+    )
     _write_atomic(Path(path), recording_id, lambda stream: log_run(stream, rec), blueprint_for(rec))
+    return list(rec.notes)
 
 
 def _write_atomic(
@@ -136,19 +155,75 @@ def _write_atomic(
 ) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
-    stream = rr.RecordingStream(APP_ID, recording_id=recording_id or str(uuid.uuid4()))
     try:
-        stream.save(tmp, default_blueprint=blueprint)
-        log(stream)
-        stream.flush()
-        stream.disconnect()  # closes the file sink: the file is complete only now
+        _save_stream(tmp, recording_id or str(uuid.uuid4()), log, blueprint)
         os.replace(tmp, path)
     except BaseException:
-        with contextlib.suppress(Exception):
-            stream.disconnect()
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
+    finally:
+        release_streams()
+
+
+def _save_stream(tmp: Path, recording_id: str, log: Any, blueprint: rrb.Blueprint | None) -> None:
+    """Log into a new stream saving to ``tmp``; the file is complete when this returns. The
+    stream is referenced only by this frame, so it is dropped on return (see
+    :func:`release_streams`)."""
+    stream = rr.RecordingStream(APP_ID, recording_id=recording_id)
+    try:
+        _with_default_blueprint(
+            blueprint,
+            lambda bp: rerun_bindings.save(str(tmp), bp, stream.to_native(), write_footer=True),
+        )  # = stream.save(tmp, default_blueprint=blueprint), without its leak
+        log(stream)
+        stream.flush()
+        stream.disconnect()  # closes the file sink: the file is complete only now
+    except BaseException:
+        with contextlib.suppress(Exception):
+            stream.disconnect()
+        raise
+
+
+def _with_default_blueprint(blueprint: rrb.Blueprint | None, attach: Callable[[Any], None]) -> None:
+    """Call ``attach(storage)``, ``storage`` being ``blueprint`` in the in-memory form rerun's
+    sinks take as their default blueprint (None without one), then free the blueprint's stream.
+
+    This is what ``RecordingStream.save`` / ``connect_grpc`` do through rerun's
+    ``create_in_memory_blueprint``, plus the ``disconnect`` they omit: that blueprint stream's
+    memory sink holds the storage, which holds the stream (a reference cycle on the Rust side),
+    so rerun's orphan sweep never frees it: 2 threads and the blueprint leaked per call.
+    """
+    if blueprint is None:
+        attach(None)
+        return
+    bp = rr.RecordingStream._from_native(
+        rerun_bindings.new_blueprint(
+            application_id=APP_ID, make_default=False, make_thread_default=False
+        )
+    )
+    try:
+        bp.set_time("blueprint", sequence=0)
+        blueprint.to_blueprint()._log_to_stream(bp)
+        attach(bp.memory_recording().storage)
+    finally:
+        bp.disconnect()  # swaps the memory sink for a buffer: breaks the cycle
+
+
+def release_streams() -> None:
+    """Free the native side (batcher and sink threads, buffers) of every ``RecordingStream``
+    of this process that Python no longer references.
+
+    rerun-sdk (0.41) keeps every stream created from Python in a native registry; dropping the
+    Python object only disconnects it (``RecordingStream.__del__``): its batcher thread, its
+    stream thread and its buffers live on until ``flush_and_cleanup_orphaned_recordings``
+    (rerun issue #2116; only ``rr.init`` calls it). With the blueprint streams (see
+    :func:`_with_default_blueprint`) that was 4 threads and 2-3 MB per recording. Streams still
+    in use (by another thread) are flushed and kept; a stream kept alive by an exception's
+    traceback goes at the next call. Side effect: clears the global data recording, which
+    LegOpt never sets. Thread-safe (rerun locks its registry).
+    """
+    rerun_bindings.flush_and_cleanup_orphaned_recordings()
 
 
 def log_run(stream: rr.RecordingStream, rec: RunRecording) -> None:
@@ -164,9 +239,12 @@ def log_run(stream: rr.RecordingStream, rec: RunRecording) -> None:
         _log_motion(stream, m)
     for s in rec.optimization:
         _log_series(stream, s)
-    for f in (rec.front, rec.best_point):
+    display = _display_of(rec)
+    for f, ui_radius in ((rec.front, FRONT_UI_RADIUS), (rec.best_point, BEST_UI_RADIUS)):
         if f is not None:
-            _log_front(stream, f)
+            _log_front(stream, f, display, ui_radius)
+    if rec.front is not None and rec.front.points and display is not None:
+        _log_front_frame(stream, rec.front, display)
 
 
 def _time_column(timeline: str, index: np.ndarray) -> rr.TimeColumn:
@@ -215,14 +293,56 @@ def _log_pose(stream: rr.RecordingStream, p: PoseTrack) -> None:
             rr.Boxes3D(half_sizes=[p.half_size], colors=[(*p.color, 200)], fill_mode="solid"),
             static=True,
         )
-    elif p.geometry == "mesh":  # a URDF mesh, scaled in a child entity
+    elif p.geometry == "mesh" and p.mesh_data:  # a URDF mesh, scaled in a child entity
+        # the bytes read inside the mesh roots (legcore.resource_paths); never a path opened here
         stream.log(f"{p.path}/mesh", rr.Transform3D(scale=p.half_size), static=True)
-        stream.log(f"{p.path}/mesh", rr.Asset3D(path=p.mesh), static=True)
+        media = rr.components.MediaType.guess_from_path(p.mesh)
+        asset = rr.Asset3D(contents=p.mesh_data, media_type=media)
+        stream.log(f"{p.path}/mesh", asset, static=True)
+
+
+def _series_groups(series: Sequence[Series]) -> list[list[Series]]:
+    """Consecutive series of one ``group`` sharing their index (the joints of one signal), and
+    every other series alone."""
+    out: list[list[Series]] = []
+    for s in series:
+        last = out[-1][0] if out else None
+        if (
+            last is not None
+            and s.group is not None
+            and s.group == last.group
+            and s.timeline == last.timeline
+            and np.array_equal(s.index, last.index)
+        ):
+            out[-1].append(s)
+        else:
+            out.append([s])
+    return out
+
+
+def _log_series_group(stream: rr.RecordingStream, group: Sequence[Series]) -> None:
+    """The joints of one signal as one entity (``Series.group``): a ``Scalars`` batch of one
+    value per joint at each sample, and one named line per joint."""
+    first = group[0]
+    entity = first.group
+    if len(group) == 1 or entity is None:
+        for s in group:
+            _log_series(stream, s)
+        return
+    values = np.stack([np.asarray(s.values, dtype=np.float64) for s in group], axis=1)
+    n_rows, n = values.shape
+    stream.send_columns(
+        entity,
+        indexes=[_time_column(first.timeline, first.index)],
+        columns=rr.Scalars.columns(scalars=values.ravel()).partition([n] * n_rows),
+    )
+    names = [f"{s.label} ({s.unit})" if s.unit else s.label for s in group]
+    stream.log(entity, rr.SeriesLines(names=names), static=True)
 
 
 def _log_motion(stream: rr.RecordingStream, m: MotionRecording) -> None:
-    for s in m.series:
-        _log_series(stream, s)
+    for group in _series_groups(m.series):
+        _log_series_group(stream, group)
     for p in m.poses:
         _log_pose(stream, p)
     for pt in m.points:
@@ -270,7 +390,67 @@ def _log_motion(stream: rr.RecordingStream, m: MotionRecording) -> None:
         )
 
 
-def _log_front(stream: rr.RecordingStream, f: FrontTrack) -> None:
+#: Point radii of the fronts in UI points (negative radii: screen-space, whatever the scale).
+FRONT_UI_RADIUS, BEST_UI_RADIUS, FINAL_UI_RADIUS, AXIS_UI_RADIUS = -2.5, -5.0, -3.5, -0.6
+C_AXES = (140, 140, 140)
+C_FINAL = (170, 200, 235)
+
+
+def _display_of(rec: RunRecording) -> FrontDisplay | None:
+    """The axes box and names of the recording's front (None without a 2-3 objective front)."""
+    if rec.front is None:
+        return None
+    pts = list(rec.front.points) + (list(rec.best_point.points) if rec.best_point else [])
+    return front_display(pts, rec.front.objective_names, str(rec.properties.get("study") or ""))
+
+
+def _box_transform(display: FrontDisplay) -> rr.Transform3D:
+    """Draws the display's box as the unit square (cube); the data keep their true values."""
+    t, s = display.transform()
+    return rr.Transform3D(translation=t.tolist(), scale=s.tolist())
+
+
+def _log_front_frame(stream: rr.RecordingStream, f: FrontTrack, display: FrontDisplay) -> None:
+    """The final front as static points (shown on every timeline, also ``time``, on which the
+    recording opens) and the named, ticked axes, both in the front's box."""
+    arche: Any = rr.Points3D if f.dims == 3 else rr.Points2D
+    final = np.asarray(f.points[-1], dtype=np.float32)[:, : f.dims]
+    path = "optimization/final_front"
+    stream.log(path, arche(final, radii=[FINAL_UI_RADIUS], colors=[C_FINAL]), static=True)
+    stream.log(path, _box_transform(display), static=True)
+    _log_axes(stream, "optimization/axes", display)
+
+
+def _log_axes(stream: rr.RecordingStream, path: str, display: FrontDisplay) -> None:
+    """Axes of a front's box at ``path`` (lines, with the box's transform and the axis names
+    as ``legopt_axis_names`` for a merge to read back) and ``path/labels`` (names, ticks)."""
+    lines, marks = display.axes()
+    strips: Any = rr.LineStrips3D if display.dims == 3 else rr.LineStrips2D
+    stream.log(
+        path,
+        strips([a.astype(np.float32) for a in lines], colors=[C_AXES], radii=[AXIS_UI_RADIUS]),
+        static=True,
+    )
+    stream.log(
+        f"{path}/labels",
+        strips(
+            [m.points.astype(np.float32) for m in marks],
+            labels=[m.label for m in marks],
+            colors=[C_AXES],
+            radii=[AXIS_UI_RADIUS],
+        ),
+        static=True,
+    )
+    stream.log(path, _box_transform(display), static=True)
+    stream.log(path, rr.AnyValues(legopt_axis_names=list(display.labels)), static=True)
+
+
+def _log_front(
+    stream: rr.RecordingStream,
+    f: FrontTrack,
+    display: FrontDisplay | None = None,
+    ui_radius: float | None = None,
+) -> None:
     lengths = [int(p.shape[0]) for p in f.points]
     pts = (
         np.concatenate(f.points).astype(np.float32)
@@ -283,7 +463,10 @@ def _log_front(stream: rr.RecordingStream, f: FrontTrack) -> None:
         indexes=[_time_column("generation", f.generations)],
         columns=arche.columns(positions=pts[:, : f.dims]).partition(lengths),
     )
-    stream.log(f.path, arche.from_fields(radii=[f.radius], colors=[f.color]), static=True)
+    radius = f.radius if display is None or ui_radius is None else ui_radius
+    stream.log(f.path, arche.from_fields(radii=[radius], colors=[f.color]), static=True)
+    if display is not None:
+        stream.log(f.path, _box_transform(display), static=True)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -334,7 +517,9 @@ def _job_views(
         spatial.append(rrb.Spatial3DView(origin=root + "world", name=f"{tag}robot, path and scene"))
     front = ents.get(root + "optimization/front")
     if front is not None:
-        contents = [f"+ /{root}optimization/front", f"+ /{root}optimization/best_point"]
+        contents = [
+            f"+ /{root}optimization/{e}" for e in ("front", "best_point", "final_front", "axes/**")
+        ]
         if any("Points2D" in a for a in front):
             spatial.append(
                 rrb.Spatial2DView(
@@ -394,12 +579,13 @@ def blueprint_for(
     spatial: list[Any] = []
     series: list[Any] = []
     if jobs:
+        with_front = [j for j in jobs if f"jobs/{j}/optimization/front" in ents]
         fronts = [
-            f"+ /jobs/{j}/optimization/front"
-            for j in jobs
-            if f"jobs/{j}/optimization/front" in ents
-        ]
-        if len(fronts) > 1:
+            f"+ /jobs/{j}/optimization/{e}"
+            for j in with_front
+            for e in ("front", "final_front")
+        ] + [f"+ /jobs/{j}/optimization/axes/**" for j in with_front[:1]]
+        if len(with_front) > 1:
             two_d = any(
                 "Points2D" in a
                 for j in jobs
@@ -425,10 +611,14 @@ def blueprint_for(
             series.append(
                 rrb.TimeSeriesView(origin="jobs", contents=best, name="best objective, all jobs")
             )
-        for j in jobs:
+        spatial.append(rrb.TextDocumentView(origin="jobs/legend", name="jobs and colours"))
+        per_job: list[Any] = []
+        for j in jobs:  # one tab per job, not one tiny view per job stacked
             sp, se = _job_views(ents, f"jobs/{j}/", j)
-            spatial.extend(sp)
-            series.extend(se)
+            if sp or se:
+                per_job.append(rrb.Tabs(*sp, *se, name=j))
+        if per_job:
+            series.append(rrb.Tabs(*per_job, name="each job"))
     else:
         spatial, series = _job_views(ents, "", None)
     parts: list[Any] = []
@@ -450,6 +640,71 @@ def blueprint_for(
 # ---------------------------------------------------------------------------------------------
 # merging
 # ---------------------------------------------------------------------------------------------
+
+#: One colour per job of a merged recording (Tableau 10 and 2 more), RGB 0-255.
+JOB_COLORS: tuple[tuple[int, int, int], ...] = (
+    (31, 119, 180), (214, 39, 40), (44, 160, 44), (255, 127, 14), (148, 103, 189),
+    (140, 86, 75), (227, 119, 194), (23, 190, 207), (188, 189, 34), (127, 127, 127),
+    (0, 0, 128), (128, 0, 0),
+)  # fmt: skip
+_COLOR_NAMES = ("blue", "red", "green", "orange", "purple", "brown", "pink", "cyan", "olive",
+                "grey", "navy", "maroon")  # fmt: skip
+
+
+def _colour_job(
+    stream: rr.RecordingStream, ents: Mapping[str, set[str]], part: str, color: tuple[int, ...]
+) -> None:
+    """Give job ``part`` of a merged recording its own colour and name on the overlaid items
+    (front points, energy and best-objective series): static values logged after the job's
+    own, so they replace them."""
+    root = f"jobs/{part}/"
+    for e, archetypes in ents.items():
+        if not e.startswith(root):
+            continue
+        rel = e[len(root) :]
+        if rel in ("optimization/front", "optimization/final_front"):
+            arche: Any = rr.Points3D if any("Points3D" in a for a in archetypes) else rr.Points2D
+            stream.log(e, arche.from_fields(colors=[color]), static=True)
+        elif rel == "signals/energy/total":
+            stream.log(e, rr.SeriesLines(colors=[color], names=[f"{part}: energy"]), static=True)
+        elif rel.startswith("optimization/best/"):
+            name = f"{part}: best {rel.rsplit('/', 1)[-1]}"
+            stream.log(e, rr.SeriesLines(colors=[color], names=[name]), static=True)
+
+
+def _front_frame_of(path: Path) -> tuple[np.ndarray | None, list[str]]:
+    """The final front (k, d) and the axis names a recording's writer stored, if any."""
+    points: np.ndarray | None = None
+    names: list[str] = []
+    for chunk in RrdReader(path).stream():
+        if chunk.entity_path not in ("/optimization/final_front", "/optimization/axes"):
+            continue
+        batch = chunk.to_record_batch()
+        for col in batch.schema.names:
+            if col.endswith(":positions") and chunk.entity_path.endswith("final_front"):
+                rows = [r for r in batch.column(col).to_pylist() if r]
+                if rows:
+                    points = np.asarray(rows[-1], dtype=float)
+            elif col.endswith("legopt_axis_names"):
+                rows = [r for r in batch.column(col).to_pylist() if r]
+                names = [str(n) for n in rows[-1]] if rows else names
+    return points, names
+
+
+def _common_display(paths: Sequence[Path]) -> FrontDisplay | None:
+    """One box for the fronts of every recording (so an overlay compares like with like)."""
+    frames = [_front_frame_of(p) for p in paths]
+    fronts = [F for F, _ in frames if F is not None and F.ndim == 2 and F.size]
+    if not fronts or len({F.shape[1] for F in fronts}) != 1:
+        return None
+    labels = next((n for _, n in frames if n), [])
+    return front_display(fronts, [], labels=labels)
+
+
+def _legend(parts: Sequence[str]) -> str:
+    """Markdown naming each job's colour."""
+    rows = [f"| {_COLOR_NAMES[i % len(_COLOR_NAMES)]} | `{p}` |" for i, p in enumerate(parts)]
+    return "\n".join(["| colour | job |", "|---|---|", *rows])
 
 
 def merge_recordings(
@@ -480,14 +735,24 @@ def merge_recordings(
         for e, a in read_entities(p).items():
             ents[f"jobs/{part}/{e}"] = a
 
+    common = _common_display(paths)
+
     def log(stream: rr.RecordingStream) -> None:
         stream.send_recording_name(f"{len(paths)} jobs: {', '.join(parts)}")
-        for p, part in zip(paths, parts, strict=True):
+        for i, (p, part) in enumerate(zip(paths, parts, strict=True)):
             stream.send_chunks(
                 c.with_entity_path(f"/jobs/{part}{c.entity_path}")
                 for c in RrdReader(p).stream()
                 if not c.entity_path.startswith("/__")
             )
+            _colour_job(stream, ents, part, JOB_COLORS[i % len(JOB_COLORS)])
+            if common is not None and f"jobs/{part}/optimization/front" in ents:
+                root = f"jobs/{part}/optimization"
+                for e in ("front", "best_point", "final_front"):
+                    stream.log(f"{root}/{e}", _box_transform(common), static=True)
+                _log_axes(stream, f"{root}/axes", common)
+        stream.log("jobs/legend", rr.TextDocument(_legend(parts), media_type="text/markdown"),
+                   static=True)  # fmt: skip
 
     _write_atomic(Path(out), recording_id, log, blueprint_for(ents, jobs=parts))
 
@@ -572,9 +837,18 @@ def _push(path: Path, grpc_url: str) -> None:
     rid = stores[0].recording_id if stores else str(uuid.uuid4())
     ents = read_entities(path)
     jobs = sorted({e.split("/")[1] for e in ents if e.startswith("jobs/") and e.count("/") >= 2})
-    stream = rr.RecordingStream(APP_ID, recording_id=rid)
     try:
-        stream.connect_grpc(grpc_url, default_blueprint=blueprint_for(ents, jobs=jobs))
+        _push_stream(reader, rid, grpc_url, blueprint_for(ents, jobs=jobs))
+    finally:
+        release_streams()
+
+
+def _push_stream(reader: RrdReader, rid: str, grpc_url: str, blueprint: rrb.Blueprint) -> None:
+    stream = rr.RecordingStream(APP_ID, recording_id=rid)  # dropped when this returns
+    try:
+        _with_default_blueprint(
+            blueprint, lambda bp: rerun_bindings.connect_grpc(grpc_url, bp, stream.to_native())
+        )
         stream.send_chunks(c for c in reader.stream() if not c.entity_path.startswith("/__"))
         stream.flush()
     finally:

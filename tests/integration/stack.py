@@ -133,7 +133,6 @@ class Stack:
             LEGOPT_HEARTBEAT_SECONDS="1",
             LEGOPT_CHECKPOINT_EVERY="1",
             NUMBA_NUM_THREADS="1",
-            REMAP_SIGTERM="SIGQUIT",
             PYTHONUNBUFFERED="1",
         )
         self.port = free_port()

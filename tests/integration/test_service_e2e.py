@@ -270,9 +270,9 @@ def test_cli_talks_to_the_service(stack: Stack, tmp_path: Path) -> None:
     out = legopt("submit", str(spec), "--wait")
     assert out.returncode == 0, out.stdout + out.stderr
     job_id = out.stdout.split()[1]
-    assert "best vs baselines" in out.stdout and "succeeded" not in out.stderr
+    assert "start → optimum" in out.stdout and "succeeded" not in out.stderr
     out = legopt("status")
-    assert out.returncode == 0 and job_id in out.stdout
+    assert out.returncode == 0 and job_id[:8] in out.stdout
     out = legopt("results", job_id, "--json")
     assert out.returncode == 0
     doc = json.loads(out.stdout)

@@ -276,3 +276,13 @@ def test_tripod_stability_along_x() -> None:
     assert np.allclose(sf, X - 2 * X * y / 5, atol=1e-12)
     assert np.allclose(sb, X + 2 * X * y / 5, atol=1e-12)
     assert sf[2] == pytest.approx(0.0, abs=1e-12) and sf[3] < 0  # leaves through the front edge
+
+
+def test_tripod_stability_nearly_parallel_diagonal_is_unbounded_not_a_number() -> None:
+    """Issue 11: a diagonal almost parallel to x gave S_f = 16 642.8 m; it is +inf now."""
+    front, middle, back = np.array([0.3, 1e-6]), np.array([-0.3, 0.0]), np.array([0.3, -0.2])
+    sf, sb = tripod_stability(front, middle, back, c=np.array([0.0, -0.05]))
+    assert sf == np.inf and np.isfinite(sb)
+    # a merely slanted diagonal stays a finite distance
+    sf2, _ = tripod_stability(np.array([0.3, 0.2]), middle, back, c=np.array([0.0, -0.05]))
+    assert np.isfinite(sf2) and sf2 > 0

@@ -41,7 +41,7 @@ def test_bad_specs_name_the_field() -> None:
     assert any(s.startswith("optimizer") and "pop_size" in s for s in _locs(bad_opt))
     with pytest.raises(ValueError, match="robot: unknown catalog robot 'r2d2'"):
         prepare({**QUICK, "robot": "r2d2"})
-    with pytest.raises(ValueError, match="robot: the quadruped_gait study needs a legged robot"):
+    with pytest.raises(ValueError, match="robot: quadruped_gait needs a legged robot"):
         prepare({**QUICK, "robot": "puma560"})
 
 

@@ -4,6 +4,7 @@ field on bad input."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import yaml
@@ -37,7 +38,17 @@ def test_run_writes_result_json_and_recording(tmp_path: Path) -> None:
     assert len(doc["history"]) == 3
     assert doc["pareto"] and set(doc["pareto"][0]) == {"x", "objectives"}
     assert (out / "recording.rrd").read_bytes()[:4] == b"RRF2"
-    assert "best vs baselines" in res.output
+    assert "Pareto front of 300 points" not in res.output  # 3 generations: the real size
+    assert re.search(r"Pareto front of \d+ points, optimum = its knee point", res.output)
+    assert "error of the triangle angle β1 (rad) — minimised (paper: f1)" in res.output
+    verbose = runner.invoke(app, ["run", str(_spec(tmp_path, "002_hexapod_workspace.yaml",
+                                                   record=False)),
+                                  "--out", str(out), "--quiet", "--verbose"])  # fmt: skip
+    assert verbose.exit_code == 0, verbose.output
+    words = " ".join(verbose.output.split())  # column headers may wrap
+    for baseline in ("start", "stance", "solution a", "straight", "paper: start"):
+        assert baseline in words  # every baseline beside the optimum, the paper's numbers
+    assert "per joint" in verbose.output
 
 
 def test_run_without_recording(tmp_path: Path) -> None:
@@ -65,3 +76,40 @@ def test_bad_specs_exit_2_naming_the_field(tmp_path: Path) -> None:
     res = runner.invoke(app, ["run", str(tmp_path / "list.yaml")])
     assert res.exit_code == 2 and "must contain a mapping" in res.output
     assert not (tmp_path / "o").exists()  # nothing written for a rejected spec
+
+
+def test_keys_create_admin_list_and_revoke(tmp_path: Path, monkeypatch: object) -> None:
+    """`legopt keys`: an admin key, an expiring key, the listing, revocation (defect 12)."""
+    import pytest
+
+    from services.store.keys import hash_api_key
+    from services.store.repository import get_api_key_by_hash
+    from services.store.session import reset_engine, session_scope
+    from services.store.settings import get_settings
+
+    mp: pytest.MonkeyPatch = monkeypatch  # type: ignore[assignment]
+    mp.setenv("LEGOPT_DATA_DIR", str(tmp_path))
+    mp.delenv("LEGOPT_DATABASE_URL", raising=False)
+    get_settings.cache_clear()
+    reset_engine()
+    try:
+        res = runner.invoke(app, ["keys", "create", "--name", "root", "--admin"])
+        assert res.exit_code == 0, res.output
+        admin_raw = res.output.strip().splitlines()[-1]
+        res = runner.invoke(app, ["keys", "create", "--name", "temp", "--expires-in-days", "1"])
+        temp_raw = res.output.strip().splitlines()[-1]
+        with session_scope() as s:
+            admin = get_api_key_by_hash(s, hash_api_key(admin_raw))
+            temp = get_api_key_by_hash(s, hash_api_key(temp_raw))
+        assert admin is not None and admin.is_admin
+        assert temp is not None and not temp.is_admin and temp.expires_at is not None
+        listing = runner.invoke(app, ["keys", "list"]).output
+        assert "root" in listing and "admin" in listing and "temp" in listing
+        assert runner.invoke(app, ["keys", "revoke", temp.id]).exit_code == 0
+        with session_scope() as s:
+            after = get_api_key_by_hash(s, hash_api_key(temp_raw))
+        assert after is not None and after.revoked_at is not None
+        assert runner.invoke(app, ["keys", "revoke", "nope"]).exit_code == 2
+    finally:
+        get_settings.cache_clear()
+        reset_engine()

@@ -14,7 +14,8 @@ Assumed values (the seed itself says these are rarely published):
 - Link 1 inertia: the reference's massless I_yy = 0.35 kg·m² gets I_xx = I_zz = 0.175 kg·m² so
   that it is a physical rigid body; link 1 only spins about y1, so joint torques are unchanged.
 - Link 3 inertia: the reference (0.066, 0.086, 0.0125) kg·m² violates the triangle inequality
-  (0.066 + 0.0125 < 0.086); I_zz is raised to 0.020 kg·m², the smallest physical value.
+  (0.066 + 0.0125 < 0.086); I_zz is raised to 0.020 kg·m², the smallest physical value. This
+  does change the dynamics slightly (joint 1's too: M[0,0] by up to 0.0075 kg·m²).
 - Welding gun (Tough Gun G2 in seed 001, whose catalogue data we do not have): a rigid tool of
   1.0 kg whose tip is 0.20 m along z6 from the wrist centre, COM at 0.10 m; its mass is added to
   link 6. ``build(tool=False)`` gives the bare arm.

@@ -25,11 +25,21 @@ from services.api.schemas import (
     ResultOut,
     objective_names,
 )
+from services.api.submission import (
+    IdempotencyKey,
+    Replay,
+    check_quota,
+    check_replay,
+    remember,
+    replay_headers,
+)
 from services.api.validation import check_job_spec, example_specs
 from services.store import lifecycle
 from services.store import repository as repo
 from services.store.errors import ArtifactError
+from services.store.idempotency import request_fingerprint
 from services.store.records import JobRecord
+from services.store.specs import json_size
 from services.store.tables import JobStatus
 
 router = APIRouter(tags=["jobs"])
@@ -62,29 +72,50 @@ def _spec_examples() -> dict[str, dict[str, object]]:
     status_code=status.HTTP_202_ACCEPTED,
     response_model=JobDetail,
     summary="Submit a job (the same spec document as `legopt run`)",
-    responses={503: {"model": ErrorOut, "description": "The job queue is unavailable."}},
+    responses={
+        429: {"model": ErrorOut, "description": "Over a quota or the request rate limit."}
+    },
 )
 def submit_job(
     spec: Annotated[JobSpecDoc, Body(openapi_examples=_spec_examples())],
     key: CurrentKey,
     ctx: Context,
     response: Response,
+    idempotency_key: IdempotencyKey = None,
 ) -> JobDetail:
     """Validate the spec exactly as a worker will run it (robot, problem, optimizer, size
     limits) — a rejected request stores nothing — then store the job and queue it.
 
     ``robot`` may be a catalog name, the id or name of one of your stored robots (its spec is
-    substituted), or an inline robot spec.
+    substituted), or an inline robot spec. Send an ``Idempotency-Key`` header to make retries
+    safe: the same key returns the job the first request created.
     """
-    with ctx.read() as session:
-        checked = check_job_spec(spec, settings=ctx.settings, lookup=robot_lookup(session, key.id))
-    with ctx.write() as session:
-        job = repo.create_job(
-            session,
-            owner_key_id=key.id,
-            spec=checked.spec,
-            total_generations=checked.total_generations,
-        )
+    fingerprint = request_fingerprint(spec)
+    try:
+        with ctx.read() as session:
+            check_replay(session, key, idempotency_key, fingerprint, "job")
+            checked = check_job_spec(
+                spec, settings=ctx.settings, lookup=robot_lookup(session, key.id)
+            )
+        with ctx.write() as session:
+            check_replay(session, key, idempotency_key, fingerprint, "job")
+            check_quota(
+                session, key, ctx.settings, new_jobs=1, new_bytes=json_size(checked.spec)
+            )
+            job = repo.create_job(
+                session,
+                owner_key_id=key.id,
+                spec=checked.spec,
+                total_generations=checked.total_generations,
+            )
+            remember(session, key, idempotency_key, fingerprint, "job", job.id)
+    except Replay as replay:
+        with ctx.read() as session:
+            job = owned_job(session, replay.record.resource_id, key.id)
+            detail = JobDetail.from_record(job, repo.job_spec(session, job))
+        response.headers.update(replay_headers())
+        response.headers["Location"] = f"{ctx.prefix}/jobs/{job.id}"
+        return detail
     ctx.send_jobs([job.id])
     response.headers["Location"] = f"{ctx.prefix}/jobs/{job.id}"
     return JobDetail.from_record(job)
@@ -110,8 +141,9 @@ def list_jobs(
             limit=page.limit,
             offset=page.offset,
         )
+        labels = repo.job_labels(session, jobs.items)
     return Page[JobOut](
-        items=[JobOut.from_record(j) for j in jobs.items],
+        items=[JobOut.from_record(j, labels[j.id]) for j in jobs.items],
         total=jobs.total,
         limit=jobs.limit,
         offset=jobs.offset,
@@ -123,7 +155,8 @@ def get_job(job_id: str, key: CurrentKey, ctx: Context) -> JobDetail:
     """Status, progress (generation / total), best objective so far, attempts, error,
     warnings, timestamps and the spec."""
     with ctx.read() as session:
-        return JobDetail.from_record(owned_job(session, job_id, key.id))
+        job = owned_job(session, job_id, key.id)
+        return JobDetail.from_record(job, repo.job_spec(session, job))
 
 
 def _no_output(job: JobRecord, what: str) -> HTTPException:
@@ -217,9 +250,9 @@ def get_recording(job_id: str, key: CurrentKey, ctx: Context) -> FileResponse:
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         artifact = repo.get_artifact(session, job.id, RECORDING)
+        labels = repo.job_labels(session, [job])[job.id]
     if artifact is None:
-        spec = job.spec if isinstance(job.spec, dict) else {}
-        if spec.get("record") is False:
+        if labels.get("record") is False:
             raise HTTPException(
                 status.HTTP_404_NOT_FOUND,
                 f"job {job.id} has no recording: recording is disabled in its spec (record: false)",
@@ -266,3 +299,27 @@ def cancel_job(job_id: str, key: CurrentKey, ctx: Context) -> JobOut:
         updated = lifecycle.request_cancel(session, job.id, owner_key_id=key.id)
     assert updated is not None
     return JobOut.from_record(updated)
+
+
+@router.delete(
+    "/jobs/{job_id}",
+    status_code=status.HTTP_204_NO_CONTENT,
+    summary="Delete a finished job and everything stored for it",
+    responses={
+        **_404,
+        409: {"model": ErrorOut, "description": "The job is still queued or running."},
+    },
+)
+def delete_job(job_id: str, key: CurrentKey, ctx: Context) -> Response:
+    """Removes the job's rows (progress, front, result, events) and its artifact files, which
+    frees storage quota. A queued or running job must be cancelled first (409)."""
+    with ctx.write() as session:
+        job = owned_job(session, job_id, key.id)
+        if not job.is_terminal:
+            raise HTTPException(
+                status.HTTP_409_CONFLICT,
+                f"job {job.id} is {job.status.value}: cancel it first (POST /jobs/{job.id}/cancel)",
+            )
+        repo.delete_job(session, job.id, owner_key_id=key.id)
+    ctx.artifacts.delete_job(job.id)
+    return Response(status_code=status.HTTP_204_NO_CONTENT)

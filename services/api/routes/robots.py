@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Response, status
+from pydantic import BaseModel, Field
 from sqlalchemy.orm import Session
 
-from legcore.robots import LeggedRobot, Robot, build_robot, catalog
+from legcore.robots import LeggedRobot, Robot, catalog
+from legcore.robots.capabilities import Capabilities, capabilities
 from services.api.deps import Context, CurrentKey, Pagination
 from services.api.errors import invalid, not_found
 from services.api.schemas import (
@@ -21,6 +23,7 @@ from services.api.schemas import (
     RobotValidate,
     RobotValidation,
 )
+from services.api.spec_cache import build_robot_cached
 from services.api.validation import (
     RobotLookup,
     build_inline_robot,
@@ -31,6 +34,52 @@ from services.store import repository as repo
 from services.store.records import RobotRecord
 
 router = APIRouter(tags=["robots"])
+
+
+class LegOut(BaseModel):
+    """One leg of a legged robot."""
+
+    name: str
+    n_joints: int
+    joint_names: list[str]
+    foot_frame: str = Field(description="The URDF frame (link) the leg ends at.")
+    hip: list[float] = Field(description="Hip joint origin in the body frame, m.")
+
+
+class CapabilitiesOut(BaseModel):
+    """What the robot offers a study (a study refuses a robot by naming a missing one)."""
+
+    kind: Literal["serial", "legged"]
+    serial_chain: bool = Field(description="One serial chain (an arm, or one leg).")
+    n_actuated: int = Field(description="Moving joints (all legs together).")
+    joint_names: list[str]
+    end_frame: str | None = Field(description="The chain's tool/foot frame (serial robots).")
+    legs: list[LegOut]
+    ik_family: str | None = Field(description="Closed-form IK that applies, if any.")
+    electrical: bool = Field(description="Kt, Ke and R on every joint: electrical energy.")
+    electrical_joints: int
+    torque_limits: bool = Field(description="A finite torque limit on every joint.")
+    prismatic: int = Field(description="Number of prismatic joints.")
+    floating_base: bool = Field(description="The whole robot's model has a free-flyer root.")
+
+    @classmethod
+    def of(cls, caps: Capabilities) -> CapabilitiesOut:
+        d = caps.as_dict()
+        d.pop("name")
+        return cls.model_validate(d)
+
+
+class RobotDetailOut(RobotDetail):
+    """A robot with its spec, the summary of its built model and its capabilities."""
+
+    capabilities: CapabilitiesOut
+
+
+class RobotValidationOut(RobotValidation):
+    """``POST /robots/validate``: the model was validated and built; what it offers."""
+
+    capabilities: CapabilitiesOut
+
 
 _404: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such robot (among yours)."}
@@ -77,15 +126,16 @@ def _out(record: RobotRecord) -> RobotOut:
     )
 
 
-def _detail(record: RobotRecord, robot: Robot | LeggedRobot | None = None) -> RobotDetail:
+def _detail(record: RobotRecord, robot: Robot | LeggedRobot | None = None) -> RobotDetailOut:
     if robot is None:
         spec = record.spec
-        robot = catalog.get(spec["catalog"]) if "catalog" in spec else build_robot(spec)
-    return RobotDetail(
+        robot = catalog.get(spec["catalog"]) if "catalog" in spec else build_robot_cached(spec)
+    return RobotDetailOut(
         **_out(record).model_dump(),
         spec=record.spec,
         inline_spec=_inline_spec(robot),
         summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
+        capabilities=CapabilitiesOut.of(capabilities(robot)),
     )
 
 
@@ -94,30 +144,31 @@ def _catalog_out(name: str) -> RobotOut:
 
 
 def _inline_spec(robot: Robot | LeggedRobot) -> dict[str, Any] | None:
-    """The spec a serial robot was built from, as JSON (None for a legged robot)."""
-    return robot.spec.model_dump(mode="json") if isinstance(robot, Robot) else None
+    """The spec a robot was built from, as JSON (None for a catalog legged robot)."""
+    return robot.spec.model_dump(mode="json") if robot.spec is not None else None
 
 
-def _catalog_detail(name: str) -> RobotDetail:
+def _catalog_detail(name: str) -> RobotDetailOut:
     robot = catalog.get(name)
-    return RobotDetail(
+    return RobotDetailOut(
         **_catalog_out(name).model_dump(),
         spec={"catalog": name},
         inline_spec=_inline_spec(robot),
         summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
+        capabilities=CapabilitiesOut.of(capabilities(robot)),
     )
 
 
 @router.post(
     "/robots",
     status_code=status.HTTP_201_CREATED,
-    response_model=RobotDetail,
+    response_model=RobotDetailOut,
     summary="Store a robot model (validated and built first)",
     responses={409: {"model": ErrorOut, "description": "You already have a robot of this name."}},
 )
 def create_robot(
     body: RobotCreate, key: CurrentKey, ctx: Context, response: Response
-) -> RobotDetail:
+) -> RobotDetailOut:
     """Validate and build the model (a non-physical model is a 422 naming the field), then
     store it. Job specs can then use its id (or name) as ``robot``."""
     if body.name in catalog.names():
@@ -133,15 +184,16 @@ def create_robot(
 
 @router.post(
     "/robots/validate",
-    response_model=RobotValidation,
+    response_model=RobotValidationOut,
     summary="Validate and build a robot model without storing it",
 )
-def validate_robot(body: RobotValidate, key: CurrentKey) -> RobotValidation:
-    """200 with a summary of the built model, or 422 naming the offending field."""
+def validate_robot(body: RobotValidate, key: CurrentKey) -> RobotValidationOut:
+    """200 with a summary of the built model and its capabilities, or 422 naming the field."""
     source, _spec, robot = validated_robot(body)
-    return RobotValidation(
+    return RobotValidationOut(
         source=source,  # type: ignore[arg-type]
         summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
+        capabilities=CapabilitiesOut.of(capabilities(robot)),
     )
 
 
@@ -172,12 +224,12 @@ def list_robots(
 
 @router.get(
     "/robots/{robot_id}",
-    response_model=RobotDetail,
+    response_model=RobotDetailOut,
     summary="One robot (yours, or a catalog name) with its spec and model summary",
     responses=_404,
 )
-def get_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotDetail:
-    """Your robot ``robot_id``, or the catalog robot of that name."""
+def get_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotDetailOut:
+    """Your robot ``robot_id``, or the catalog robot of that name, with its capabilities."""
     if robot_id in catalog.names():
         return _catalog_detail(robot_id)
     with ctx.read() as session:

@@ -25,10 +25,21 @@ from services.api.schemas import (
     SweepSummary,
     objective_names,
 )
-from services.api.sweeps import SweepError, SweepPoint, expand, get_path, swept_paths
+from services.api.submission import (
+    IdempotencyKey,
+    Replay,
+    check_quota,
+    check_replay,
+    remember,
+    replay_headers,
+)
+from services.api.sweeps import SweepError, SweepPoint, expand, swept_paths
 from services.api.validation import CheckedJob, check_job_spec, resolve_robot
 from services.store import repository as repo
+from services.store.errors import ArtifactError
+from services.store.idempotency import request_fingerprint
 from services.store.records import JobRecord
+from services.store.specs import json_size, spec_value
 from services.store.tables import JobStatus
 
 router = APIRouter(tags=["sweeps"])
@@ -66,59 +77,93 @@ def _relocate(errors: list[dict[str, Any]], point: SweepPoint) -> list[dict[str,
     status_code=status.HTTP_202_ACCEPTED,
     response_model=SweepCreated,
     summary="Create a sweep: one job per grid point × list entry × seed",
-    responses={503: {"model": ErrorOut, "description": "The job queue is unavailable."}},
+    responses={
+        429: {"model": ErrorOut, "description": "Over a quota or the request rate limit."}
+    },
 )
 def create_sweep(
-    body: SweepCreate, key: CurrentKey, ctx: Context, response: Response
+    body: SweepCreate,
+    key: CurrentKey,
+    ctx: Context,
+    response: Response,
+    idempotency_key: IdempotencyKey = None,
 ) -> SweepCreated:
     """Expand the sweep, validate EVERY generated spec (nothing is stored if one fails), store
-    the sweep and its jobs in one transaction, then queue them."""
-    checked: list[CheckedJob] = []
-    with ctx.read() as session:
-        lookup = robot_lookup(session, key.id)
-        base = resolve_robot(body.base, lookup, _BASE)
-        try:
-            points = expand(base, body.grid, body.entries, body.seeds, max_jobs=ctx.max_sweep_jobs)
-        except SweepError as exc:
-            raise invalid(("body", *exc.loc), exc.message) from None
-        errors: list[dict[str, Any]] = []
-        seen: set[tuple[str, str]] = set()
-        cache: dict[str, Any] = {}
-        for point in points:
-            try:
-                checked.append(
-                    check_job_spec(
-                        point.spec, settings=ctx.settings, lookup=lookup, prefix=_BASE, cache=cache
-                    )
-                )
-            except RequestValidationError as exc:
-                for err in _relocate(list(exc.errors()), point):
-                    ident = (repr(err["loc"]), err["msg"])
-                    if ident not in seen:
-                        seen.add(ident)
-                        errors.append(err)
-                if len(errors) >= MAX_ERRORS:
-                    break
-        if errors:
-            raise validation_error(errors)
-    axes = {"grid": body.grid, "list": body.entries, "seeds": body.seeds, "n_jobs": len(points)}
-    with ctx.write() as session:
-        sweep = repo.create_sweep(session, owner_key_id=key.id, base_spec=body.base, axes=axes)
-        jobs = [
-            repo.create_job(
+    the sweep (its base spec once) and its jobs (their overrides) in one transaction, then
+    queue them. An ``Idempotency-Key`` header makes retries safe."""
+    fingerprint = request_fingerprint(body.model_dump(mode="json", by_alias=True))
+    try:
+        with ctx.read() as session:
+            check_replay(session, key, idempotency_key, fingerprint, "sweep")
+            base, points, checked = _expand_and_check(body, key.id, ctx, session)
+        axes = {"grid": body.grid, "list": body.entries, "seeds": body.seeds, "n_jobs": len(points)}
+        new_bytes = json_size(base) + sum(json_size(p.overrides) for p in points)
+        with ctx.write() as session:
+            check_replay(session, key, idempotency_key, fingerprint, "sweep")
+            check_quota(session, key, ctx.settings, new_jobs=len(points), new_bytes=new_bytes)
+            sweep = repo.create_sweep(session, owner_key_id=key.id, base_spec=base, axes=axes)
+            job_ids = repo.create_jobs(
                 session,
                 owner_key_id=key.id,
-                spec=c.spec,
-                total_generations=c.total_generations,
+                overrides=[p.overrides for p in points],
+                total_generations=[c.total_generations for c in checked],
                 sweep_id=sweep.id,
             )
-            for c in checked
-        ]
-    job_ids = [j.id for j in jobs]
+            remember(session, key, idempotency_key, fingerprint, "sweep", sweep.id)
+    except Replay as replay:
+        response.headers.update(replay_headers())
+        return _created(ctx, key.id, replay.record.resource_id, response)
     ctx.send_jobs(job_ids)
+    return _created(ctx, key.id, sweep.id, response, job_ids)
+
+
+def _expand_and_check(
+    body: SweepCreate, key_id: str, ctx: Any, session: Any
+) -> tuple[dict[str, Any], list[SweepPoint], list[CheckedJob]]:
+    """The sweep's base (robot reference resolved), its points and their checked specs; a 422
+    locating every distinct error at the override that caused it."""
+    lookup = robot_lookup(session, key_id)
+    base = resolve_robot(body.base, lookup, _BASE)
+    try:
+        points = expand(base, body.grid, body.entries, body.seeds, max_jobs=ctx.max_sweep_jobs)
+    except SweepError as exc:
+        raise invalid(("body", *exc.loc), exc.message) from None
+    checked: list[CheckedJob] = []
+    errors: list[dict[str, Any]] = []
+    seen: set[tuple[str, str]] = set()
+    cache: dict[str, Any] = {}
+    for point in points:
+        try:
+            checked.append(
+                check_job_spec(
+                    point.spec, settings=ctx.settings, lookup=lookup, prefix=_BASE, cache=cache
+                )
+            )
+        except RequestValidationError as exc:
+            for err in _relocate(list(exc.errors()), point):
+                ident = (repr(err["loc"]), err["msg"])
+                if ident not in seen:
+                    seen.add(ident)
+                    errors.append(err)
+            if len(errors) >= MAX_ERRORS:
+                break
+    if errors:
+        raise validation_error(errors)
+    return base, points, checked
+
+
+def _created(
+    ctx: Any, key_id: str, sweep_id: str, response: Response, job_ids: list[str] | None = None
+) -> SweepCreated:
+    with ctx.read() as session:
+        sweep = repo.get_sweep(session, sweep_id, owner_key_id=key_id)
+        if sweep is None:
+            raise not_found("sweep", sweep_id)
+        counts = repo.count_jobs_by_status(session, owner_key_id=key_id, sweep_id=sweep.id)
+        if job_ids is None:
+            total = sum(counts.values())
+            job_ids = [j.id for j in _jobs_in_order(session, key_id, sweep.id, total, total, 0)]
     response.headers["Location"] = f"{ctx.prefix}/sweeps/{sweep.id}"
-    counts = {s: 0 for s in JobStatus}
-    counts[JobStatus.QUEUED] = len(jobs)
     return SweepCreated(**SweepSummary.from_record(sweep, counts).model_dump(), job_ids=job_ids)
 
 
@@ -191,7 +236,10 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
             SweepRow(
                 job_id=job.id,
                 status=job.status,
-                overrides={path: get_path(job.spec, path) for path in columns},
+                overrides={
+                    path: spec_value(job.spec or sweep.base_spec, job.overrides, path)
+                    for path in columns
+                },
                 progress=job.progress,
                 best_objective=job.best_objective,
                 objectives=objectives,
@@ -271,7 +319,14 @@ def get_sweep_recording(
     names = [f"{i + 1}_{job_id[:8]}" for i, (job_id, _) in enumerate(artifacts)]
     tmpdir = Path(tempfile.mkdtemp(prefix="legopt-merge-"))
     out = tmpdir / f"sweep-{sweep.id}.rrd"
-    merge_recordings(paths, out, names)
+    try:
+        merge_recordings(paths, out, names)
+    except (RuntimeError, ValueError, OSError) as exc:
+        shutil.rmtree(tmpdir, ignore_errors=True)
+        raise ArtifactError(
+            f"the recordings of sweep {sweep.id} could not be merged ({type(exc).__name__}: "
+            f"{exc}); download them one by one from /jobs/{{id}}/recording"
+        ) from None
     return FileResponse(
         out,
         media_type="application/octet-stream",

@@ -25,10 +25,12 @@ from legcore.problems.path_placement import (
     STUDY,
     Params,
     build,
-    compare_initialisations,
     max_manipulability,
     simplified_workspace,
 )
+from legcore.problems.path_placement_init import compare_initialisations
+from legcore.problems.path_placement_joints import placed_path_joints
+from legcore.problems.path_placement_params import constraint_names
 from legcore.problems.path_placement_paths import (
     JAR_DURATION,
     PAN_DURATION,
@@ -38,7 +40,7 @@ from legcore.problems.path_placement_paths import (
     rpy_to_matrix,
 )
 from legcore.problems.registry import get_study
-from legcore.robots import catalog
+from legcore.robots import build_robot, catalog
 from legcore.runner import run
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
@@ -177,7 +179,8 @@ def test_params_reject_bad_input_with_the_field_named() -> None:
     ):
         with pytest.raises(ValueError, match=field):
             parse_job_spec({"problem": {"kind": "path_placement", **bad}})
-    with pytest.raises(ValueError, match="robot: .*PUMA-type"):
+    with pytest.raises(ValueError, match="^robot: path_placement needs ≥ 6 actuated joints; "
+                                         "robot articulated_5dof has 5$"):
         run({"robot": "articulated_5dof", "problem": {"kind": "path_placement"}})
 
 
@@ -248,6 +251,86 @@ def test_fixed_branch_and_joint_limited_timing(robot: Any, pan: Any) -> None:
     # the original against itself: no change
     for key in ("energy_change_pct", "manipulability_change_pct", "time_change_pct"):
         assert s.metrics[key] == pytest.approx(0.0, abs=1e-9)
+
+
+# ------------------------------------------------------------------------------ any arm
+
+
+def _numeric_puma(motors: bool = True) -> Any:
+    """The PUMA 560 without its closed form (solved numerically), optionally without motors."""
+    spec = catalog.get("puma560").spec
+    joints = spec.joints if motors else [j.model_copy(update={"motor": None})
+                                         for j in spec.joints]
+    return build_robot(spec.model_copy(update={"ik": None, "name": "puma560_numeric",
+                                               "joints": joints}))
+
+
+def _seed_shell(pan: Any) -> dict[str, Any]:
+    ws = pan.workspace
+    return {"kind": "shell", "center": tuple(ws.origin), "R": (ws.R_min, ws.R_max),
+            "gamma": (ws.gamma_up, ws.gamma_low), "phi": (ws.phi_low, ws.phi_up)}
+
+
+def test_numerical_ik_path_equals_the_closed_form_fast_path(robot: Any, pan: Any) -> None:
+    """The same arm without its closed form: started on the closed form's branch, the batched
+    numerical IK follows the same joint trajectory (1e-8 rad) and gives the same cost (without
+    friction: its Coulomb term flips sign with a joint speed of 1e-7 rad/s where the closed
+    form gives exactly 0)."""
+    arm = _numeric_puma()
+    x0 = pan.x_original
+    d = build(robot, Params(path="pan", friction=False))._detail(x0)
+    q_cf = d["q"]
+    q_num, ok = placed_path_joints(arm, pan.placed_poses(x0), closed_form=False, branches=(0,),
+                                   starts=q_cf[:1], rest=q_cf[0])
+    assert ok.all()
+    np.testing.assert_allclose(q_num[0, 0], q_cf, atol=1e-8)
+    pr = build(arm, Params(path="pan", region=_seed_shell(pan), postures=(tuple(q_cf[0]),),
+                           max_manipulability=pan.w_max, friction=False))
+    assert not pr.closed_form and pr.branch_names == ("posture 0",)
+    s = pr.solution(x0)
+    assert s.extra["ik"] == "numerical" and s.extra["energy_kind"] == "electrical"
+    # eqs 6-8 (fast path) and Yoshikawa's measure (generic) agree on the motion
+    assert manipulability(arm, s.motion.q) == pytest.approx(
+        manipulability_split(robot, s.motion.q)[0], rel=1e-9)
+    assert s.objectives["J"] == pytest.approx(d["J"], rel=1e-7)
+    assert s.metrics["energy_J"] == pytest.approx(d["energy"], rel=1e-6)
+    assert np.abs(fk(arm, s.motion.q)[:, :3, 3] - s.motion.tool).max() < 1e-9
+
+
+def test_regions_energy_kinds_and_refusals(pan: Any) -> None:
+    arm = _numeric_puma(motors=False)
+    box = {"kind": "box", "lo": (0.2, -0.5, 0.3), "hi": (0.7, 0.5, 0.9)}
+    pr = build(arm, Params(path="pan", region=box, original=(0.25, 0.0, 0.80)))
+    assert pr.xl == pytest.approx([0.2, -0.5, 0.3]) and pr.energy_kind == "mechanical"
+    assert pr.workspace.point([0.3, 0.1, 0.5]) == pytest.approx([0.3, 0.1, 0.5])
+    s = pr.solution(np.array([0.5, 0.1, 0.6]))
+    assert {"x", "y", "z"} <= set(s.metrics) and s.motion.power_kind == "mechanical"
+    assert s.motion.tool[0] == pytest.approx([0.5, 0.1, 0.6])
+    # mechanical energy: ∫ Σ|τ q̇| dt of the decoded motion
+    m = s.motion
+    P = np.abs(m.tau * m.qd).sum(axis=1)
+    assert s.metrics["energy_J"] == pytest.approx(float(np.sum(0.5 * (P[1:] + P[:-1]) * np.diff(
+        m.t))), rel=1e-12)
+    sphere = build(arm, Params(path="pan", region={"kind": "sphere", "center": (0, 0, 0.67),
+                                                   "radius": 0.8}))
+    assert sphere.xl == pytest.approx([0.0, -math.pi / 2, -math.pi])
+    assert sphere.xu == pytest.approx([0.8, math.pi / 2, math.pi])
+    default = build(arm, Params(path="pan"))  # not PUMA-type: the reach shell about the shoulder
+    assert default.workspace.source.startswith("reach shell")
+    assert default.workspace.origin == pytest.approx(pan.workspace.origin)  # O_s, on the axis
+    assert default.workspace.R_max > pan.workspace.R_max
+    with pytest.raises(ValueError, match="^robot: path_placement with energy 'electrical' "
+                                         "needs motor data"):
+        build(arm, Params(path="pan", energy="electrical"))
+    with pytest.raises(ValueError, match="^branch: the named branches"):
+        build(arm, Params(path="pan", branch="left-up-flip"))
+    with pytest.raises(ValueError, match="^postures.0: 2 values for the 6 joints"):
+        build(arm, Params(path="pan", postures=((0.0, 1.0),)))
+    with pytest.raises(ValueError, match="R: need 0 <= R_min < R_max"):
+        Params(region={"kind": "shell", "center": (0, 0, 0), "R": (0.5, 0.2)})
+    mech = build(catalog.get("puma560"), Params(path="pan", energy="mechanical"))
+    assert mech.solution(mech.x_original).extra["energy_kind"] == "mechanical"
+    assert constraint_names(7)[-1] == "nominal_power" and len(constraint_names(7)) == 15
 
 
 # ------------------------------------------------------------------------------ HKA (Must show)

@@ -387,3 +387,37 @@ def test_example_spec_reaches_the_minimum_energy_step():
     assert e <= 0.78 and e <= 0.66 * base.objectives["energy_per_metre"]
     s, h, beta = best.x
     assert 0.045 < s < 0.07 and h < 0.0105 and 0.83 < beta < 0.88
+
+
+# ------------------------------------------------------------------------------ any quadruped
+def test_closed_form_fast_path_equals_the_numerical_ik():
+    """The leg2 closed form (analytic rates) against legcore.ik.solve + Jacobian rates on the
+    same robot: joint motion, torques, energy and margin agree."""
+    X = np.array([DEFAULT_X, NEAR_OPT_X, [0.1, 0.04, 0.77]])
+    fast = build(ROBOT, Params())
+    slow = build(ROBOT, Params(ik="numeric"))
+    a, b = fast.simulate(X, detail=True), slow.simulate(X, detail=True)
+    assert a["reachable"].all() and b["reachable"].all()
+    np.testing.assert_allclose(b["q"], a["q"], atol=1e-6)
+    np.testing.assert_allclose(b["qd"], a["qd"], atol=1e-5)
+    np.testing.assert_allclose(b["qdd"], a["qdd"], rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(b["tau"], a["tau"], atol=1e-7)
+    np.testing.assert_allclose(b["E"], a["E"], rtol=1e-6)
+    np.testing.assert_allclose(b["margin"], a["margin"], atol=1e-9)
+    sol = slow.solution(DEFAULT_X)
+    assert set(sol.extra["ik"].values()) == {"numerical (legcore.ik.solve)"}
+
+
+def test_legs_by_corner_and_clear_errors():
+    p = build(ROBOT, Params())
+    assert p.roles == ("FL", "FR", "RL", "RR") and p.extras(np.zeros((0, 3)), np.zeros((0, 1)))[
+        "legs"] == {"FL": "FL", "FR": "FR", "RL": "RL", "RR": "RR"}
+    with pytest.raises(ValueError, match="^q_ref: unknown legs"):
+        build(ROBOT, Params(q_ref={"XX": (0.0, 0.0)}))
+    with pytest.raises(ValueError, match="^q_ref: leg 'FL' has 2 joints"):
+        build(ROBOT, Params(q_ref={"FL": (0.0, 0.0, 0.0)}))
+    with pytest.raises(ValueError, match="^servo_offset_deg: leg 'FR' has 2 joints"):
+        build(ROBOT, Params(servo_offset_deg={"FR": (0.0, 0.0, 0.0)}))
+    with pytest.raises(ValueError, match="^robot: quadruped_gait needs 4 legs of 2–3 joints; "
+                                         "robot citedi_hexapod has 6 legs"):
+        get_study("quadruped_gait").build(catalog.get("citedi_hexapod"), Params())

@@ -37,7 +37,7 @@ from legcore.problems.swing_energy_geometry import (
     segment_box_depth,
     via_basis,
 )
-from legcore.robots import catalog
+from legcore.robots import build_robot, catalog
 from legcore.trajectories import ViaPointSpline
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
@@ -216,8 +216,13 @@ def test_params_are_validated_with_the_field_named() -> None:
         _problem(q_end=(0.0, 4.0, 0.0))
     with pytest.raises(ValueError, match="foot_end"):
         _problem(foot_end=(1.0, 0.0, 0.0))
-    with pytest.raises(ValueError, match="robot"):
+    # a 6-joint arm may swing (any chain of 2-6 joints), but seed 000's start is for 3 joints
+    with pytest.raises(ValueError, match="^q_start: give q_start or foot_start"):
         build(catalog.get("puma560"), Params())
+    seven = {"kind": "dh", "name": "seven", "joints": [{"a": 0.1}] * 7}
+    with pytest.raises(ValueError, match="^robot: swing_energy needs 2–6 actuated joints; "
+                                         "robot seven has 7"):
+        get_study("swing_energy").build(build_robot(seven), Params())
     with pytest.raises(ValueError, match="robot"):
         legcore.run({"robot": "citedi_hexapod", "problem": {"kind": "swing_energy"}})
 

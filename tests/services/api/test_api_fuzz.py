@@ -1,21 +1,114 @@
 """OpenAPI fuzzing with schemathesis: no operation answers 5xx to generated input (positive
-and negative cases, bounded and derandomized so the run is short and reproducible)."""
+and negative cases, bounded and derandomized so the run is short and reproducible).
+
+Operations with a path id run each generated case twice: as generated (an id that does not
+exist) and with the id of a real resource of the caller's — a robot, a finished job with a
+result, Pareto front and generations, a sweep, another API key (the fuzzer is an admin) — so
+the handlers behind the 404 are fuzzed too (pagination, cursors, filters). Longer local runs:
+``LEGOPT_FUZZ_EXAMPLES=100``.
+"""
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import schemathesis
+from api_helpers import finish_like_a_worker, new_key
 from fastapi.testclient import TestClient
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, Phase, given
+from hypothesis import settings as hypothesis_settings
 from hypothesis.errors import Unsatisfiable
 from schemathesis import GenerationMode
 
-MAX_EXAMPLES = 6
+from services.api.app import create_app
+from services.api.deps import ApiContext
+from services.store.keys import generate_api_key
+from services.store.repository import create_api_key
+from services.store.settings import Settings
+
+MAX_EXAMPLES = int(os.environ.get("LEGOPT_FUZZ_EXAMPLES", "8"))
+
+#: Methods whose calls with a real id would destroy the resource the other operations need.
+DESTRUCTIVE = {"DELETE"}
 
 
-def test_openapi_fuzz_finds_no_server_error(client: TestClient, alice: dict[str, str]) -> None:
-    schema = schemathesis.openapi.from_asgi("/api/v1/openapi.json", client.app)
+def _real_ids(client: TestClient, ctx: ApiContext, headers: dict[str, str]) -> dict[str, str]:
+    """A robot, a sweep and its first job (finished like a worker would, without a recording:
+    the fake bytes of ``finish_like_a_worker`` are no .rrd the sweep merge could read)."""
+    dh = client.get("/api/v1/robots/puma560", headers=headers).json()["inline_spec"]
+    robot = client.post("/api/v1/robots", json={"name": "fuzz", "spec": dh}, headers=headers)
+    assert robot.status_code == 201, robot.text
+    base = {"problem": {"kind": "path_tracking"}, "budget": {"generations": 2}}
+    sweep = client.post("/api/v1/sweeps", json={"base": base, "seeds": [1, 2]}, headers=headers)
+    assert sweep.status_code == 202, sweep.text
+    job_id = sweep.json()["job_ids"][0]
+    finish_like_a_worker(ctx, job_id, n_pareto=40, recording=None)
+    return {
+        "robot_id": robot.json()["id"],
+        "job_id": job_id,
+        "sweep_id": sweep.json()["id"],
+        "k": "0",
+    }
+
+
+def _app_and_admin(settings: Settings, sent: list[str]) -> tuple[Any, dict[str, str]]:
+    """An app without rate limit (the fuzzer sends hundreds of requests a second) and the
+    headers of an admin key, so the key routes are fuzzed beyond their 403."""
+    app = create_app(
+        settings.with_overrides(rate_limit_per_s=1e9, rate_limit_burst=10**9), enqueue=sent.append
+    )
+    raw, key_hash = generate_api_key()
+    with app.state.context.write() as session:
+        create_api_key(session, name="fuzzer", key_hash=key_hash, role="admin")
+    return app, {"X-API-Key": raw}
+
+
+def test_openapi_fuzz_finds_no_server_error(settings: Settings, sent: list[str]) -> None:
+    app, headers = _app_and_admin(settings, sent)
+    with TestClient(app, raise_server_exceptions=False) as client:
+        ctx: ApiContext = app.state.context
+        ids = {**_real_ids(client, ctx, headers), "key_id": new_key(ctx, "victim")[1]}
+        _fuzz(app, headers, ids)
+
+
+def test_openapi_stateful_finds_no_server_error(settings: Settings, sent: list[str]) -> None:
+    """Schemathesis' stateful phase: call sequences chained by the links it infers (POST
+    /sweeps -> GET /sweeps/{id}, POST /jobs -> cancel, delete, ...)."""
+    app, headers = _app_and_admin(settings, sent)
+    failures: list[str] = []
+    labels: set[str] = set()
+    base = schemathesis.openapi.from_asgi("/api/v1/openapi.json", app).as_state_machine()
+
+    class Workflow(base):  # type: ignore[misc, valid-type]
+        def get_call_kwargs(self, case: Any) -> dict[str, Any]:
+            return {"headers": headers}
+
+        def validate_response(self, response: Any, case: Any, **kwargs: Any) -> None:
+            labels.add(case.operation.label)
+            if response.status_code >= 500:
+                failures.append(
+                    f"{case.operation.label} -> {response.status_code}: "
+                    f"{response.text[:300]}\n  {case.as_curl_command()}"
+                )
+
+    with TestClient(app, raise_server_exceptions=False):
+        Workflow.run(
+            settings=hypothesis_settings(
+                max_examples=MAX_EXAMPLES,
+                stateful_step_count=6,
+                deadline=None,
+                database=None,
+                derandomize=True,
+                suppress_health_check=list(HealthCheck),
+            )
+        )
+    assert len(labels) >= 8, f"the stateful phase reached only {sorted(labels)}"
+    assert not failures, "\n".join(failures)
+
+
+def _fuzz(app: Any, headers: dict[str, str], ids: dict[str, str]) -> None:
+    schema = schemathesis.openapi.from_asgi("/api/v1/openapi.json", app)
     failures: list[str] = []
     n_operations = 0
     for result in schema.get_all_operations():
@@ -23,7 +116,7 @@ def test_openapi_fuzz_finds_no_server_error(client: TestClient, alice: dict[str,
         n_operations += 1
         for mode in (GenerationMode.POSITIVE, GenerationMode.NEGATIVE):
 
-            @settings(
+            @hypothesis_settings(
                 max_examples=MAX_EXAMPLES,
                 deadline=None,
                 database=None,
@@ -33,12 +126,21 @@ def test_openapi_fuzz_finds_no_server_error(client: TestClient, alice: dict[str,
             )
             @given(case=operation.as_strategy(generation_mode=mode))
             def call(case: Any) -> None:
-                response = case.call(headers=alice)
-                if response.status_code >= 500:
-                    failures.append(
-                        f"{case.operation.label} -> {response.status_code}: "
-                        f"{response.text[:300]}\n  {case.as_curl_command()}"
-                    )
+                cases = [case]
+                names = set(case.path_parameters or {})
+                if names and case.method.upper() not in DESTRUCTIVE:
+                    missing = names - set(ids)
+                    assert not missing, f"add a real id for {sorted(missing)} in _real_ids"
+                    real = case.derive()
+                    real.path_parameters = {**case.path_parameters, **{n: ids[n] for n in names}}
+                    cases.append(real)
+                for c in cases:
+                    response = c.call(headers=headers)
+                    if response.status_code >= 500:
+                        failures.append(
+                            f"{c.operation.label} -> {response.status_code}: "
+                            f"{response.text[:300]}\n  {c.as_curl_command()}"
+                        )
 
             try:
                 call()

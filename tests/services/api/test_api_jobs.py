@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import time
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import pytest
@@ -281,19 +282,29 @@ def test_cancel(client: TestClient, ctx: ApiContext, alice: dict[str, str]) -> N
     assert client.post(f"{API}/jobs/nope/cancel", headers=alice).status_code == 404
 
 
-def test_enqueue_failure_cancels_and_503(
+def test_broker_down_at_submit_keeps_the_job_queued_and_due(
     settings: Any, ctx: ApiContext, alice: dict[str, str]
 ) -> None:
+    """An accepted job is never lost: with the broker down the job stays queued and due, and
+    the dispatcher sends it once the broker answers (before: cancelled with a 503)."""
     from services.api.app import create_app
+    from services.worker.dispatcher import dispatch_pass
 
     def broken(_job_id: str) -> None:
         raise ConnectionError("broker down")
 
     with TestClient(create_app(settings, enqueue=broken)) as c:
         r = c.post(f"{API}/jobs", json={"problem": {"kind": KINDS[0]}}, headers=alice)
-        assert r.status_code == 503 and "broker down" in r.json()["detail"]
+        assert r.status_code == 202
+        job_id = r.json()["id"]
         jobs = c.get(f"{API}/jobs", headers=alice).json()["items"]
-    assert [j["status"] for j in jobs] == ["cancelled"]
+    assert [j["status"] for j in jobs] == ["queued"]
+    sent: list[str] = []
+    later = datetime.now(UTC) + timedelta(seconds=settings.dispatch_period_s + 1)
+    report = dispatch_pass(
+        sent.append, lambda: 0, actor="t", settings=settings, now=later, bind=ctx.session_factory
+    )
+    assert report.leader and sent == [job_id]
 
 
 def test_another_key_gets_404_everywhere(

@@ -142,3 +142,58 @@ def test_progress_rows_are_all_written_when_batched(settings: Settings) -> None:
         ckpt = latest_checkpoint(s, job_id)
     assert [r.generation for r in rows] == list(range(1, 9))
     assert ckpt is not None and ckpt.generation == 8  # the final state is always checkpointed
+
+
+def test_a_stale_worker_never_overwrites_the_winners_artifacts(
+    settings: Settings, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Defect 6: a worker paused past its lease and resumed wrote its recording over the
+    winner's (same fixed path) before finish_job refused it: the download then answered 500
+    forever. Now each attempt writes under its own directory and only the lease holder's
+    files are recorded; the loser removes its own."""
+    from services.store.artifacts import ArtifactStore
+
+    job_id = _job({**SPEC, "record": True})
+    real_store = execute._store_result
+    paused: dict[str, Any] = {}
+
+    def stale_store(jid: str, wid: str, *args: Any) -> None:
+        if wid == "stale":  # paused before its artifacts: meanwhile the lease expires...
+            paused["args"] = (jid, wid, *args)
+            raise execute.LeaseLostError("pretend the lease ran out while paused")
+        real_store(jid, wid, *args)
+
+    monkeypatch.setattr(execute, "_store_result", stale_store)
+    assert execute.execute_job(job_id, settings, wid="stale").status == "lease-lost"
+    with session_scope() as s:  # the stale worker's lease expired
+        requeue_expired(s, now_utc() + timedelta(seconds=settings.lease_seconds + 1))
+    assert execute.execute_job(job_id, settings, wid="winner").status == "succeeded"
+    with session_scope() as s:
+        art = repo.get_artifact(s, job_id, "recording")
+    assert art is not None
+    store = ArtifactStore.from_settings(settings)
+    winner_bytes = store.read(art.relative_path, art.sha256)
+    # ... and the stale worker resumes: it writes its own files, then finish_job refuses it
+    with pytest.raises(execute.LeaseLostError):
+        real_store(*paused["args"])
+    assert store.read(art.relative_path, art.sha256) == winner_bytes  # checksum still holds
+    attempts = sorted(p.name for p in (store.root / job_id).iterdir())
+    assert attempts == [art.relative_path.split("/")[1]]  # the loser's directory is gone
+
+
+def test_a_solo_worker_past_its_memory_limit_stops_after_the_job(
+    settings: Settings, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Worker recycling without forking: past ``worker_max_memory_mb`` a solo worker asks
+    Celery for a warm shutdown after its job (``serve`` or compose starts a fresh one)."""
+    from celery.worker import state
+
+    assert execute.resident_mb() > 10  # the real one reads /proc
+    monkeypatch.setattr(state, "should_stop", None)
+    monkeypatch.setattr(execute, "resident_mb", lambda: 500.0)
+    execute._recycle_if_large(settings.with_overrides(worker_max_memory_mb=1000))
+    assert state.should_stop is None
+    execute._recycle_if_large(settings.with_overrides(worker_max_memory_mb=0))  # off
+    assert state.should_stop is None
+    execute._recycle_if_large(settings.with_overrides(worker_max_memory_mb=100))
+    assert state.should_stop == 0

@@ -1,5 +1,6 @@
 """A robot given as URDF is drawn with its own <visual> geometry (boxes, cylinders, spheres and
-local mesh files) attached to its animated link frames."""
+mesh files inside allowed roots) attached to its animated link frames; without roots (an
+uploaded robot) no mesh file is read."""
 
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ f 1 2 3
 """
 
 
-def urdf(mesh: Path) -> str:
+def urdf(mesh: str) -> str:
     inertial = """<inertial><origin xyz="0.1 0 0"/><mass value="1"/>
       <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.004" iyz="0" izz="0.004"/></inertial>"""
     return f"""<robot name="vis">
@@ -31,7 +32,7 @@ def urdf(mesh: Path) -> str:
       <geometry><cylinder radius="0.03" length="0.3"/></geometry></visual></link>
   <link name="lower">{inertial}
     <visual><geometry><sphere radius="0.04"/></geometry></visual>
-    <visual><geometry><mesh filename="file://{mesh}" scale="2 2 2"/></geometry></visual>
+    <visual><geometry><mesh filename="{mesh}" scale="2 2 2"/></geometry></visual>
     <visual><geometry><mesh filename="package://nowhere/x.stl"/></geometry></visual></link>
   <joint name="j1" type="revolute"><parent link="base"/><child link="upper"/>
     <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="20" velocity="3"/></joint>
@@ -45,7 +46,7 @@ def urdf(mesh: Path) -> str:
 def robot_and_motion(tmp_path: Path):  # type: ignore[no-untyped-def]
     mesh = tmp_path / "tri.obj"
     mesh.write_text(OBJ)
-    robot = build_robot({"kind": "urdf", "name": "vis", "urdf": urdf(mesh)})
+    robot = build_robot({"kind": "urdf", "name": "vis", "urdf": urdf("package://vis/tri.obj")})
     t = np.linspace(0, 1, 20)
     q = np.stack([np.sin(t), np.cos(t)], axis=1)
     motion = Motion(t=t, q=q, joint_names=("j1", "j2"), tool=fk(robot, q)[:, :3, 3], robot="vis")
@@ -55,7 +56,9 @@ def robot_and_motion(tmp_path: Path):  # type: ignore[no-untyped-def]
 def test_urdf_visuals_are_recorded(robot_and_motion, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     robot, motion = robot_and_motion
     path = tmp_path / "urdf.rrd"
-    W.write_recording(fake_result(motion, m=1, generations=2), path, robot=robot)
+    W.write_recording(
+        fake_result(motion, m=1, generations=2), path, robot=robot, mesh_roots=[tmp_path]
+    )
     entities = W.read_entities(path)
     visuals = {e: a for e, a in entities.items() if "/visual_" in e}
     kinds = {next(iter(sorted(a)), "") for a in visuals.values() if a}
@@ -65,6 +68,11 @@ def test_urdf_visuals_are_recorded(robot_and_motion, tmp_path: Path) -> None:  #
     assert any(e.endswith("frames/2/visual_1/mesh") and "rerun.archetypes.Asset3D" in a
                for e, a in entities.items())  # fmt: skip
     assert not any(e.endswith("frames/2/visual_2") for e in entities)  # missing mesh: skipped
+    # the same robot uploaded (no roots): no file is read, the mesh is noted
+    bare = tmp_path / "bare.rrd"
+    notes = W.write_recording(fake_result(motion, m=1, generations=2), bare, robot=robot)
+    assert not any("rerun.archetypes.Asset3D" in a for a in W.read_entities(bare).values())
+    assert any("package://vis/tri.obj" in n and "no file access" in n for n in notes)
 
 
 def test_missing_mesh_is_noted(robot_and_motion) -> None:  # type: ignore[no-untyped-def]

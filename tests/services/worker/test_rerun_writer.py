@@ -87,6 +87,13 @@ def column(batches: list[pa.RecordBatch], name: str, index: str) -> tuple[np.nda
     return i[order], [vals[k] for k in order]
 
 
+def signal(batches: list[pa.RecordBatch], j: int, index: str = "time") -> tuple[np.ndarray, list]:
+    """(index, [[value]] rows) of joint ``j`` of a signal logged as one entity (a ``Scalars``
+    batch of one value per joint at each sample)."""
+    t, vals = column(batches, "Scalars:scalars", index)
+    return t, [[v[j]] for v in vals]
+
+
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) given as x, y, z, w."""
     x, y, z, w = (q[:, i].astype(float) for i in range(4))
@@ -138,12 +145,7 @@ def test_entity_paths(written: tuple) -> None:
     path, _, _ = written
     ents = read_back(path)
     expected = (
-        [
-            f"signals/{k}/q{j}"
-            for k in ("q", "qd", "qdd", "jerk", "tau", "power")
-            for j in range(1, 6)
-        ]
-        + [f"signals/energy/q{j}" for j in range(1, 6)]
+        [f"signals/{k}" for k in ("q", "qd", "qdd", "jerk", "tau", "power", "energy")]
         + ["signals/energy/total"]
         + [f"world/robot/frames/{k}" for k in range(6)]
         + [f"world/robot/frames/{k}/link" for k in range(1, 6)]
@@ -151,13 +153,20 @@ def test_entity_paths(written: tuple) -> None:
         + ["world/scene/targets", "world/scene/obstacles", "world/scene/support_polygon"]
         + ["optimization/best/f1", "optimization/front_size", "optimization/ideal/f2"]
         + ["optimization/front", "optimization/best_point"]
-        + ["baselines/parabolic/signals/q/q1", "baselines/min_energy/signals/energy/total"]
+        + ["baselines/parabolic/signals/q", "baselines/min_energy/signals/energy/total"]
         + ["world/baselines/parabolic/path", "world/baselines/min_energy/path"]
     )
     missing = [e for e in expected if e not in ents]
     assert not missing
     assert set(W.read_entities(path)) == set(ents) - {e for e in ents if e.startswith("__")}
     assert "rerun.archetypes.Capsules3D" in W.read_entities(path)["world/robot/frames/3/link"]
+    assert not any(e.startswith("signals/q/") for e in ents)  # the joints share one entity
+    names = [
+        b.column("SeriesLines:names").to_pylist()[0]
+        for b in ents["signals/q"]
+        if "SeriesLines:names" in b.schema.names
+    ]
+    assert names == [[f"joint position q{j} (rad)" for j in range(1, 6)]]
 
 
 def test_joint_signals_sample_counts_and_values(written: tuple) -> None:
@@ -167,11 +176,13 @@ def test_joint_signals_sample_counts_and_values(written: tuple) -> None:
     rec = R.record_run(res)
     for kind in ("q", "qd", "tau", "power"):
         for j in range(1, 6):
-            t, vals = column(ents[f"signals/{kind}/q{j}"], "Scalars:scalars", "time")
-            assert len(t) == rec.best.series_at(f"signals/{kind}/q{j}").n_samples
+            t, vals = signal(ents[f"signals/{kind}"], j - 1)
+            s = rec.best.series_at(f"signals/{kind}/q{j}")
+            assert len(t) == s.n_samples and s.group == f"signals/{kind}"
             assert 1000 < len(t) <= 2000
+            np.testing.assert_array_equal([v[0] for v in vals], s.values)
     # q at several times equals the Motion's q (time stamps are the original samples' times)
-    t, vals = column(ents["signals/q/q3"], "Scalars:scalars", "time")
+    t, vals = signal(ents["signals/q"], 2)
     q3 = np.array([v[0] for v in vals])
     for k in (0, 1234, 2500, 4999):
         hit = np.flatnonzero(np.isclose(t, motion.t[k], rtol=0, atol=1e-9))
@@ -182,9 +193,9 @@ def test_joint_signals_sample_counts_and_values(written: tuple) -> None:
     np.testing.assert_array_equal(q3, motion.q[k, 2])
     assert t[0] == 0.0 and t[-1] == pytest.approx(motion.t[-1])
     # baselines: all their samples (fewer than the cap)
-    tb, _ = column(ents["baselines/parabolic/signals/q/q2"], "Scalars:scalars", "time")
+    tb, _ = signal(ents["baselines/parabolic/signals/q"], 1)
     assert len(tb) == 600
-    assert "SeriesLines:names" in static_components(ents["signals/q/q3"])
+    assert "SeriesLines:names" in static_components(ents["signals/q"])
 
 
 def test_link_frames_are_transforms_over_time(written: tuple) -> None:
@@ -253,7 +264,7 @@ def test_long_motion_is_capped(tmp_path: Path) -> None:
     motion = arm_motion(K=200_000, T=200.0)
     W.write_recording(fake_result(motion, m=1), path, max_samples=1000)
     ents = read_back(path)
-    t, _ = column(ents["signals/qd/q1"], "Scalars:scalars", "time")
+    t, _ = signal(ents["signals/qd"], 0)
     assert len(t) <= 1000
     t, _ = column(ents["world/robot/frames/5"], "Transform3D:translation", "time")
     assert len(t) == 1000
@@ -306,11 +317,11 @@ def test_merge_recordings(tmp_path: Path) -> None:
     (store,) = reader.recordings()
     assert store.recording_id == "sweep-1" and len(reader.blueprints()) == 1
     ents = read_back(out)
-    assert "jobs/seed_1/signals/q/q1" in ents and "jobs/seed-2/signals/q/q1" in ents
+    assert "jobs/seed_1/signals/q" in ents and "jobs/seed-2/signals/q" in ents
     assert "jobs/seed_1/world/robot/frames/2/link" in ents
     assert not any(e.startswith(("signals", "world", "jobs/seed_1/__")) for e in ents)
-    t1, _ = column(ents["jobs/seed_1/signals/q/q1"], "Scalars:scalars", "time")
-    t2, _ = column(ents["jobs/seed-2/signals/q/q1"], "Scalars:scalars", "time")
+    t1, _ = signal(ents["jobs/seed_1/signals/q"], 0)
+    t2, _ = signal(ents["jobs/seed-2/signals/q"], 0)
     assert (len(t1), len(t2)) == (300, 700)
     g, _ = column(ents["jobs/seed-2/optimization/front"], "Points3D:positions", "generation")
     assert list(g) == [6]
@@ -383,7 +394,7 @@ def test_serve_web_answers_200_on_localhost_and_serves_the_data(
         finally:
             saver.terminate()
             saver.wait(10)
-        assert "signals/q/q1" in W.read_entities(got)
+        assert "signals/q" in W.read_entities(got)
     assert viewer.process.poll() is not None  # stopped
 
 
@@ -430,8 +441,13 @@ def test_example_spec_recording(spec_path: Path, tmp_path: Path) -> None:
     assert path.stat().st_size < 20e6
     ents = read_back(path)
     motion = res.best.motion
-    part = R.entity_part(motion.joint_names[-1])
-    t, vals = column(ents[f"signals/q/{part}"], "Scalars:scalars", "time")
+    n_joints = len(motion.joint_names)
+    t, vals = (
+        signal(ents["signals/q"], n_joints - 1)
+        if n_joints > 1
+        else column(ents[f"signals/q/{R.entity_part(motion.joint_names[0])}"], "Scalars:scalars",
+                    "time")
+    )  # fmt: skip
     assert len(t) == min(motion.n_samples, len(t)) and 0 < len(t) <= 2000
     k = np.searchsorted(motion.t, t - 1e-12)
     np.testing.assert_array_equal([v[0] for v in vals], motion.q[k, -1])
@@ -444,4 +460,4 @@ def test_example_spec_recording(spec_path: Path, tmp_path: Path) -> None:
         assert [len(p) for p in pts] == [len(fronts[k]) for k in sorted(fronts)]
     for name in res.baselines:
         if res.baselines[name].motion is not None:
-            assert f"baselines/{R.entity_part(name)}/signals/q/{part}" in ents
+            assert f"baselines/{R.entity_part(name)}/signals/q" in ents

@@ -1,0 +1,342 @@
+"""Damped Newton (Levenberg–Marquardt) inverse kinematics of one sample, compiled with numba.
+
+The building block of :mod:`legcore.ik.numeric`: :func:`newton` moves one configuration ``q``
+(n,) in place until the tool reaches one target, on the serial-chain arrays of
+:class:`~legcore.robots.Chain` (:mod:`legcore.ik.sample_kinematics`). Tasks, by their number of
+rows m: ``TASK_POSITION`` (3), ``TASK_AXIS`` (5: position + tool z axis, the spin about it
+free), ``TASK_POSE`` (6).
+
+Far from the target (error above ``near``, default 1e-3 × the robot's reach): Levenberg–Marquardt
+on the task, ``Δq = Aᵀ (A Aᵀ + λ² I)⁻¹ e`` (``e`` (m,) the task error, ``A`` (m, n) its Jacobian,
+orientation rows scaled by ``w`` m/rad). A step that lowers ``|e|²`` is accepted (λ ← λ/10); if
+not, the half and the quarter step are tried, then λ ← 10 λ. An attempt whose ``|e|²`` did not
+halve over 10 iterations has stalled (a local minimum, often against a limit) and gives up.
+
+Near the target, on a chain redundant for the task (n > m) with a rest posture: each step is the
+undamped Newton step plus the move along the self-motion manifold toward the rest posture,
+``N g (q_rest − q)`` with ``N = I − A⁺A`` (gain g halved whenever that move stops shrinking) —
+the iteration for the configuration nearest ``q_rest`` among those on target.
+
+Joint limits: a joint at a limit whose step points outward is frozen (its column removed) and the
+step recomputed; the step is scaled to at most ``max_step`` (rad or m) per joint and clamped into
+the limits, so ``q`` never leaves them. Converged: position error ≤ ``tol_p`` (m), orientation
+error ≤ ``tol_r`` (rad) and, when redundant, ``|N (q_rest − q)| ≤ null_tol`` (rad); the last
+10 iterations of an attempt only finish the task. Not converged within ``max_iter``, stalled, or
+λ > ``lam_max``: unreachable from this start.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from legcore.ik.sample_kinematics import TASK_AXIS, TASK_POSE, TASK_POSITION, errors, fk_jac_one
+
+__all__ = [
+    "PRM_LAM0",
+    "PRM_LAM_MAX",
+    "PRM_MAX_STEP",
+    "PRM_NEAR",
+    "PRM_NULL_GAIN",
+    "PRM_NULL_TOL",
+    "PRM_SIZE",
+    "PRM_TOL_P",
+    "PRM_TOL_R",
+    "PRM_W",
+    "TASK_AXIS",
+    "TASK_POSE",
+    "TASK_POSITION",
+    "errors",
+    "newton",
+    "workspace",
+]
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+# indices into the float parameter vector ``prm``
+PRM_TOL_P = 0  # m
+PRM_TOL_R = 1  # rad
+PRM_W = 2  # m/rad, weight of the orientation rows
+PRM_LAM0 = 3  # initial damping (m)
+PRM_LAM_MAX = 4  # give up above this damping
+PRM_NULL_GAIN = 5  # gain g of the rest-posture pull (1 = full projected step)
+PRM_NULL_TOL = 6  # rad (or m): converged when the null-space pull is below this
+PRM_MAX_STEP = 7  # rad (or m): largest joint step per iteration
+PRM_NEAR = 8  # m: below this error the rest pull joins the Newton step
+PRM_SIZE = 9
+
+_BACKTRACK = 3  # step lengths tried before more damping
+_RESERVE = 10  # the last iterations of an attempt only finish the task, no more rest pull
+_STALL_WINDOW = 10  # iterations
+_STALL_RATIO = 0.5  # an attempt whose |e|² did not halve over a window has stalled
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _chol_solve(M: FloatArray, m: int, b: FloatArray, x: FloatArray) -> None:  # pragma: no cover
+    """Solve ``M x = b`` for the m×m SPD ``M`` already factorised in place (lower Cholesky)."""
+    for i in range(m):
+        s = b[i]
+        for k in range(i):
+            s -= M[i, k] * x[k]
+        x[i] = s / M[i, i]
+    for i in range(m - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, m):
+            s -= M[k, i] * x[k]
+        x[i] = s / M[i, i]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _step(
+    q: FloatArray,
+    A: FloatArray,
+    e: FloatArray,
+    lam: float,
+    lo: FloatArray,
+    hi: FloatArray,
+    rest: FloatArray,
+    gain: float,
+    use_null: bool,
+    dq: FloatArray,
+    M: FloatArray,
+    free: BoolArray,
+    r: FloatArray,
+    y: FloatArray,
+    b: FloatArray,
+) -> float:  # pragma: no cover - compiled
+    """Damped step into ``dq`` with limit freezing; returns max |null-space pull| (0 if unused)."""
+    m, n = A.shape
+    for j in range(n):
+        free[j] = True
+    null_size = 0.0
+    for _ in range(n + 1):
+        # M = A_f A_fᵀ + λ² I, Cholesky in place
+        for a in range(m):
+            for c in range(a + 1):
+                s = 0.0
+                for j in range(n):
+                    if free[j]:
+                        s += A[a, j] * A[c, j]
+                M[a, c] = s
+            M[a, a] += lam * lam
+        for i in range(m):
+            for k in range(i + 1):
+                s = M[i, k]
+                for t in range(k):
+                    s -= M[i, t] * M[k, t]
+                if i == k:
+                    M[i, i] = math.sqrt(max(s, 1e-300))
+                else:
+                    M[i, k] = s / M[k, k]
+        _chol_solve(M, m, e, y)
+        for j in range(n):
+            s = 0.0
+            if free[j]:
+                for a in range(m):
+                    s += A[a, j] * y[a]
+            dq[j] = s
+        null_size = 0.0
+        if use_null:
+            for j in range(n):
+                r[j] = gain * (rest[j] - q[j]) if free[j] else 0.0
+            for a in range(m):
+                s = 0.0
+                for j in range(n):
+                    s += A[a, j] * r[j]
+                b[a] = s
+            _chol_solve(M, m, b, y)
+            for j in range(n):
+                if free[j]:
+                    s = r[j]
+                    for a in range(m):
+                        s -= A[a, j] * y[a]
+                    dq[j] += s
+                    null_size = max(null_size, abs(s))
+        changed = False
+        for j in range(n):
+            if free[j] and (
+                (q[j] <= lo[j] and dq[j] < 0.0) or (q[j] >= hi[j] and dq[j] > 0.0)
+            ):
+                free[j] = False
+                changed = True
+        if not changed:
+            break
+    return null_size
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def workspace(n: int, m: int) -> tuple:  # pragma: no cover
+    """Scratch arrays of :func:`newton` for n joints and m task rows (allocate once, reuse)."""
+    return (
+        np.empty((n, 3, 3)),  # 0 joint frames (world rotations)
+        np.empty((n, 3)),  # 1 joint origins
+        np.empty((4, 4)),  # 2 tool pose
+        np.empty((6, n)),  # 3 Jacobian
+        np.empty(m),  # 4 e
+        np.empty((m, n)),  # 5 A
+        np.empty(m),  # 6 e trial
+        np.empty((m, n)),  # 7 A trial
+        np.empty((3, 3)),  # 8 tmp
+        np.empty(n),  # 9 dq
+        np.empty((m, m)),  # 10 M
+        np.empty(n, dtype=np.bool_),  # 11 free
+        np.empty(n),  # 12 r
+        np.empty(m),  # 13 y
+        np.empty(m),  # 14 b
+        np.empty(n),  # 15 q trial
+        np.empty(n),  # 16 q best
+    )
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _evaluate(
+    qv: FloatArray, ws: tuple, tp: FloatArray, tR: FloatArray, task: int, w: float,
+    e: FloatArray, A: FloatArray, R: FloatArray, p: FloatArray, axis: FloatArray,
+    prismatic: BoolArray, tool_R: FloatArray, tool_p: FloatArray,
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """Task error and Jacobian of configuration ``qv`` into (e, A); returns (|e|², ep, er)."""
+    T, J = ws[2], ws[3]
+    fk_jac_one(qv, R, p, axis, prismatic, tool_R, tool_p, ws[0], ws[1], T, J)
+    return errors(T, J, tp, tR, task, w, e, A, ws[8])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def newton(
+    q: FloatArray,
+    tp: FloatArray,
+    tR: FloatArray,
+    task: int,
+    lo: FloatArray,
+    hi: FloatArray,
+    rest: FloatArray,
+    use_rest: bool,
+    R: FloatArray,
+    p: FloatArray,
+    axis: FloatArray,
+    prismatic: BoolArray,
+    tool_R: FloatArray,
+    tool_p: FloatArray,
+    prm: FloatArray,
+    max_iter: int,
+    ws: tuple,
+) -> tuple[bool, int, float, float]:  # pragma: no cover - compiled
+    """Solve one target from ``q`` (n,), in place.
+
+    ``tp`` (3,) target position (m); ``tR`` (3, 3) target rotation (``TASK_POSE``) or a matrix
+    whose column 2 is the target unit axis (``TASK_AXIS``); ``lo``/``hi`` (n,) joint limits;
+    ``rest`` (n,) rest posture, used when ``use_rest`` and n > m; chain arrays as in
+    :class:`~legcore.robots.Chain`; ``prm`` the ``PRM_*`` parameters; ``ws`` from
+    :func:`workspace`. ``q`` is clamped into the limits first and stays inside them.
+    Returns ``(converged, iterations, position error m, orientation error rad)``; iterations
+    count FK + Jacobian evaluations after the first.
+    """
+    n = q.shape[0]
+    m = task
+    tol_p = prm[PRM_TOL_P]
+    tol_r = prm[PRM_TOL_R]
+    w = prm[PRM_W]
+    lam_max = prm[PRM_LAM_MAX]
+    lam_min = 1e-9 * w
+    gain = prm[PRM_NULL_GAIN]
+    null_tol = prm[PRM_NULL_TOL]
+    max_step = prm[PRM_MAX_STEP]
+    near2 = prm[PRM_NEAR] ** 2
+    redundant = use_rest and n > m
+    e, A, e_t, A_t, dq, M, free = ws[4], ws[5], ws[6], ws[7], ws[9], ws[10], ws[11]
+    r, y, b, q_t, q_best = ws[12], ws[13], ws[14], ws[15], ws[16]
+
+    for j in range(n):
+        q[j] = min(max(q[j], lo[j]), hi[j])
+    f, ep, er = _evaluate(q, ws, tp, tR, task, w, e, A, R, p, axis, prismatic, tool_R, tool_p)
+    lam = prm[PRM_LAM0]
+    it = 0
+    f_window = f
+    it_window = 0
+    null_prev = math.inf
+    have_best = False
+    ep_best, er_best = math.inf, math.inf
+    while it < max_iter:
+        conv = ep <= tol_p and er <= tol_r
+        if redundant and f <= near2 and it < max_iter - _RESERVE:
+            # near the target: Newton step plus a step along the self-motion manifold toward
+            # the rest posture, taken together; converged when both are below tolerance
+            # undamped (λ_min): damping would leak the rest pull into the task rows
+            null_size = _step(q, A, e, lam_min, lo, hi, rest, gain, True, dq, M, free, r, y, b)
+            if conv:
+                if null_size <= null_tol * gain:  # |N (q_rest − q)| ≤ null_tol
+                    return True, it, ep, er
+                for j in range(n):  # keep the solution in case the walk goes astray
+                    q_best[j] = q[j]
+                have_best = True
+                ep_best, er_best = ep, er
+            if null_size >= null_prev:  # the pull is not shrinking (overshoot): smaller steps
+                gain *= 0.5
+            null_prev = null_size
+            big = 0.0
+            for j in range(n):
+                big = max(big, abs(dq[j]))
+            alpha = max_step / big if big > max_step else 1.0
+            for j in range(n):
+                q[j] = min(max(q[j] + alpha * dq[j], lo[j]), hi[j])
+            f, ep, er = _evaluate(
+                q, ws, tp, tR, task, w, e, A, R, p, axis, prismatic, tool_R, tool_p
+            )
+            it += 1
+            f_window = f
+            it_window = it
+            continue
+        if conv:
+            return True, it, ep, er
+        if it >= it_window + _STALL_WINDOW:  # give up a stalled attempt (a local minimum)
+            if f > _STALL_RATIO * f_window:
+                break
+            f_window = f
+            it_window = it
+        _step(q, A, e, lam, lo, hi, rest, gain, False, dq, M, free, r, y, b)
+        big = 0.0
+        for j in range(n):
+            big = max(big, abs(dq[j]))
+        if not math.isfinite(big):  # a numerically singular system: damp more
+            lam *= 10.0
+            it += 1
+            if lam > lam_max:
+                break
+            continue
+        alpha = max_step / big if big > max_step else 1.0
+        accepted = False
+        f_t, ep_t, er_t = f, ep, er
+        for _ in range(_BACKTRACK):  # α, α/2, α/4: curvature (near a singularity) shortens it
+            for j in range(n):
+                q_t[j] = min(max(q[j] + alpha * dq[j], lo[j]), hi[j])
+            f_t, ep_t, er_t = _evaluate(
+                q_t, ws, tp, tR, task, w, e_t, A_t, R, p, axis, prismatic, tool_R, tool_p
+            )
+            it += 1
+            if f_t < f:
+                accepted = True
+                break
+            alpha *= 0.5
+        if accepted:
+            for j in range(n):
+                q[j] = q_t[j]
+            for a in range(m):
+                e[a] = e_t[a]
+                for j in range(n):
+                    A[a, j] = A_t[a, j]
+            f, ep, er = f_t, ep_t, er_t
+            lam = max(0.1 * lam, lam_min)
+        else:
+            lam *= 10.0
+            if lam > lam_max:
+                break
+    conv = ep <= tol_p and er <= tol_r
+    if not conv and have_best:
+        for j in range(n):
+            q[j] = q_best[j]
+        conv = True
+        ep, er = ep_best, er_best
+    return conv, it, ep, er

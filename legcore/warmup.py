@@ -1,0 +1,76 @@
+"""Compile every numba kernel once, ahead of the first job (issue 12, warm starts).
+
+    python -m legcore.warmup            # e.g. in the image build, with NUMBA_CACHE_DIR set
+
+Runs one small job of every built-in study kind (its default robot and settings, a population
+of 8 for 1 generation, seed 000's baseline GAs for 1 generation) through the whole
+``legcore.run`` — evaluation, IK of the baselines and placements, decoding — so that every
+``@numba.njit(cache=True)`` kernel is compiled with the signatures the jobs use and written to
+numba's cache (``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` next to the package). A later
+process loads them instead of compiling. Prints one line per kind and the total time.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Any
+
+__all__ = ["warm_up", "warmup_spec"]
+
+#: Per-kind parameters that keep the warm-up job small.
+_SMALL: dict[str, dict[str, Any]] = {
+    "swing_energy": {"baseline_generations": 1, "baseline_pop_size": 8},
+}
+
+
+def warmup_spec(kind: str, study: Any) -> dict[str, Any]:
+    """A tiny job of ``kind``: its default optimiser with population 8 (MOEA/D: as many
+    subproblems as neighbours), one generation."""
+    params = dict(study.default_optimizer["params"])
+    for name in ("pop_size", "n_samples", "n_subproblems"):
+        if name in params:
+            params[name] = max(8, int(params.get("n_neighbors", 0)))
+    return {
+        "problem": {"kind": kind, **_SMALL.get(kind, {})},
+        "optimizer": {"kind": study.default_optimizer["kind"], "params": params},
+        "budget": {"generations": 1},
+        "seed": 0,
+    }
+
+
+def warm_up(kinds: list[str] | None = None, *, verbose: bool = True) -> dict[str, float]:
+    """Run the warm-up job of each kind (default: every built-in kind); seconds per kind.
+
+    A kind whose job fails is reported (``nan``) and skipped: warming up is best effort.
+    """
+    from legcore.problems.registry import STUDY_MODULES, studies
+    from legcore.runner import run
+
+    found = studies()
+    chosen = kinds if kinds is not None else [k for k in found if k in STUDY_MODULES]
+    out: dict[str, float] = {}
+    for kind in chosen:
+        t0 = time.perf_counter()
+        try:
+            run(warmup_spec(kind, found[kind]))
+            out[kind] = time.perf_counter() - t0
+        except Exception as exc:  # noqa: BLE001 - best effort, reported
+            out[kind] = float("nan")
+            if verbose:
+                print(f"warmup: {kind}: failed: {type(exc).__name__}: {exc}", flush=True)
+            continue
+        if verbose:
+            print(f"warmup: {kind}: {out[kind]:.1f} s", flush=True)
+    return out
+
+
+def main(argv: list[str]) -> int:
+    t0 = time.perf_counter()
+    times = warm_up(argv or None)
+    print(f"warmup: {len(times)} kinds in {time.perf_counter() - t0:.1f} s", flush=True)
+    return 0 if all(t == t for t in times.values()) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))

@@ -1,0 +1,252 @@
+"""Response models of the dashboard's routes (jobs page, fronts, motions, sweep cells, robots)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from pydantic import BaseModel, Field
+
+from services.store.dashboard_queries import JobRow
+from services.store.tables import JobStatus
+
+
+class Quantity(BaseModel):
+    """An objective, metric or decision variable with its readable label and SI unit."""
+
+    name: str
+    label: str
+    unit: str = Field(description="SI unit ('' when dimensionless or unknown).")
+    axis: str = Field(description="label [unit], as plots show it.")
+    sense: str = Field(default="", description="min / max when smaller / larger is better.")
+
+
+def quantities(names: list[str] | tuple[str, ...], kind: str | None = None) -> list[Quantity]:
+    """Readable labels and units of the result keys ``names`` of the study ``kind``."""
+    from services.api.quantities import describe_all
+
+    return [Quantity(**d) for d in describe_all(names, kind)]
+
+
+class JobRowOut(BaseModel):
+    """One line of the jobs page."""
+
+    id: str
+    name: str | None
+    kind: str
+    robot: str
+    optimizer: str
+    seed: int
+    tags: list[str]
+    status: JobStatus
+    sweep_id: str | None
+    generation: int
+    total_generations: int
+    progress: float
+    best_objective: Any = None
+    attempts: int
+    cancel_requested: bool
+    error: str | None
+    created_at: datetime
+    started_at: datetime | None
+    finished_at: datetime | None
+
+    @classmethod
+    def from_row(cls, row: JobRow) -> JobRowOut:
+        job = row.job
+        return cls(
+            id=job.id,
+            name=row.name,
+            kind=row.kind,
+            robot=row.robot,
+            optimizer=row.optimizer,
+            seed=row.seed,
+            tags=list(row.tags),
+            status=job.status,
+            sweep_id=job.sweep_id,
+            generation=job.progress_generation,
+            total_generations=job.total_generations,
+            progress=job.progress,
+            best_objective=job.best_objective,
+            attempts=job.attempt_count,
+            cancel_requested=job.cancel_requested,
+            error=job.error_message,
+            created_at=job.created_at,
+            started_at=job.started_at,
+            finished_at=job.finished_at,
+        )
+
+
+class JobRowPage(BaseModel):
+    """A page of the jobs page: rows, how many match, and the cursor of the next page."""
+
+    items: list[JobRowOut]
+    total: int = Field(
+        description="Jobs matching the filters (all pages), counted up to 10 001: "
+        "10 001 means more than 10 000."
+    )
+    limit: int
+    offset: int
+    next_cursor: str | None = Field(
+        default=None, description="Pass as `cursor` for the next page (newest-first order)."
+    )
+
+
+class Choice(BaseModel):
+    """A value a filter of the jobs page can take."""
+
+    value: str
+    label: str
+
+
+class DashboardOptions(BaseModel):
+    """What the jobs page's filters offer."""
+
+    kinds: list[Choice]
+    optimizers: list[Choice]
+    statuses: list[str]
+    sorts: list[str]
+
+
+class FrontPointOut(BaseModel):
+    """One point of a job's final front: objectives and decision vector by position."""
+
+    index: int
+    objectives: list[float | None]
+    x: list[float | None]
+
+
+class BaselineMark(BaseModel):
+    """A baseline (the study's reference solution, e.g. the paper's own) on the front plot."""
+
+    name: str
+    objectives: list[float | None] = Field(description="In the order of `objectives`.")
+    metrics: dict[str, Any]
+
+
+class FrontOut(BaseModel):
+    """Everything the front plot and table of one job need."""
+
+    job_id: str
+    status: JobStatus
+    objectives: list[Quantity]
+    variables: list[Quantity]
+    metrics: list[Quantity] = Field(description="Labels of the result's metrics.")
+    points: list[FrontPointOut]
+    best_index: int | None = Field(description="The point closest to the reported optimum.")
+    baselines: list[BaselineMark]
+    hypervolume_ref: list[float] | None
+
+
+class MotionSignal(BaseModel):
+    """One joint signal: ``values[j][i]`` is joint j at sample i."""
+
+    name: str
+    label: str
+    unit: str
+    values: list[list[float | None]]
+
+
+class MotionOut(BaseModel):
+    """One solution decoded again: which one, its objectives and metrics, its joint signals."""
+
+    job_id: str
+    source: str = Field(description="point | baseline | best")
+    index: int | None = None
+    name: str | None = None
+    x: list[float] | None
+    objectives: dict[str, float]
+    metrics: dict[str, float]
+    t: list[float]
+    joint_names: list[str]
+    signals: list[MotionSignal]
+    energy: list[float | None] | None
+    source_samples: int = Field(default=0, description="Samples of the motion before thinning.")
+    power_kind: str = "mechanical"
+    recording_url: str | None = Field(
+        default=None, description="Where this solution's Rerun recording is (points only)."
+    )
+
+
+class CellStat(BaseModel):
+    """Mean and sample standard deviation over the jobs of a cell that have the value."""
+
+    mean: float | None
+    sd: float | None
+    n: int
+
+
+class SweepCell(BaseModel):
+    """One cell of a sweep's grid: the jobs sharing every swept value but the seed."""
+
+    index: int
+    values: dict[str, Any] = Field(description="The swept values (seed excluded).")
+    job_ids: list[str]
+    seeds: list[Any]
+    counts: dict[str, int]
+    stats: dict[str, CellStat] = Field(description="Column name -> mean ± sd.")
+
+
+class SweepCellsOut(BaseModel):
+    """A sweep as a grid of cells; ``best`` names, per column, the index of the best cell
+    (least mean for objectives, largest for the hypervolume)."""
+
+    sweep_id: str
+    columns: list[str] = Field(description="The swept paths that make a cell (seed excluded).")
+    stat_columns: list[Quantity]
+    objective_names: list[str]
+    cells: list[SweepCell]
+    best: dict[str, int]
+    hypervolume_ref: list[float] | None = Field(
+        description="The sweep-wide reference point of the cells' hypervolumes."
+    )
+
+
+class CellFront(BaseModel):
+    """The final fronts of one cell's jobs (objective vectors)."""
+
+    cell: int
+    label: str
+    jobs: list[dict[str, Any]]
+
+
+class SweepFrontsOut(BaseModel):
+    """Fronts of chosen cells, for an overlay plot."""
+
+    sweep_id: str
+    objectives: list[Quantity]
+    cells: list[CellFront]
+
+
+class JointOut(BaseModel):
+    """One joint of a robot: limits (SI) and the mass of the link it moves."""
+
+    name: str
+    leg: str | None = None
+    lower: float | None
+    upper: float | None
+    velocity: float | None
+    effort: float | None
+    link_mass_kg: float | None
+
+
+class StudyFit(BaseModel):
+    """Whether a study kind accepts the robot, and why not."""
+
+    kind: str
+    title: str
+    accepts: bool
+    reason: str | None = None
+
+
+class RobotView(BaseModel):
+    """A robot's joints, limits, masses and the study kinds that accept it."""
+
+    id: str
+    name: str
+    kind: str
+    nq: int
+    mass_kg: float
+    legs: list[str]
+    joints: list[JointOut]
+    studies: list[StudyFit]

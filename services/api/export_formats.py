@@ -1,0 +1,97 @@
+"""Tables as CSV, JSON or Parquet files (the dashboard's and ``legopt export``'s downloads).
+
+A table is its column names and an iterable of rows (tuples in column order). CSV and JSON are
+written as they are read (a 10^5-job list streams page by page); Parquet (pyarrow, which
+rerun-sdk already needs) is built in memory, column types inferred (numbers, strings, times).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections.abc import Iterable, Iterator, Sequence
+from datetime import datetime
+from typing import Any, Literal
+
+__all__ = ["FORMATS", "MEDIA_TYPES", "ExportFormat", "encode", "filename"]
+
+ExportFormat = Literal["csv", "json", "parquet"]
+FORMATS: tuple[str, ...] = ("csv", "json", "parquet")
+MEDIA_TYPES = {
+    "csv": "text/csv; charset=utf-8",
+    "json": "application/json",
+    "parquet": "application/vnd.apache.parquet",
+}
+
+
+def _cell(value: Any) -> Any:
+    if isinstance(value, datetime):
+        return value.isoformat()
+    if isinstance(value, float) and value != value:
+        return None
+    if isinstance(value, list | tuple | dict):
+        return json.dumps(value, separators=(",", ":"))
+    return value
+
+
+def _csv(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
+    n = 0
+    for row in rows:
+        writer.writerow(["" if v is None else _cell(v) for v in row])
+        n += 1
+        if n % 500 == 0:
+            yield buf.getvalue().encode()
+            buf.seek(0)
+            buf.truncate()
+    yield buf.getvalue().encode()
+
+
+def _json(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
+    yield b'{"columns":' + json.dumps(list(columns)).encode() + b',"rows":['
+    first = True
+    for row in rows:
+        items = [v.isoformat() if isinstance(v, datetime) else v for v in row]
+        text = json.dumps(dict(zip(columns, items, strict=True)), default=str)
+        yield (b"" if first else b",") + text.encode()
+        first = False
+    yield b"]}"
+
+
+def _parquet(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    data: list[list[Any]] = [[] for _ in columns]
+    for row in rows:
+        for i, v in enumerate(row):
+            data[i].append(json.dumps(v) if isinstance(v, list | tuple | dict) else v)
+    arrays = []
+    for values in data:
+        try:
+            arrays.append(pa.array(values))
+        except (pa.ArrowInvalid, pa.ArrowTypeError):  # mixed types: as text
+            arrays.append(pa.array([None if v is None else str(v) for v in values]))
+    table = pa.Table.from_arrays(arrays, names=list(columns))
+    out = io.BytesIO()
+    pq.write_table(table, out)
+    yield out.getvalue()
+
+
+def encode(fmt: str, columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
+    """The bytes of the table in ``fmt`` (``csv``, ``json`` or ``parquet``), in chunks."""
+    if fmt == "csv":
+        return _csv(columns, rows)
+    if fmt == "json":
+        return _json(columns, rows)
+    if fmt == "parquet":
+        return _parquet(columns, rows)
+    raise ValueError(f"format: expected one of {', '.join(FORMATS)}, got {fmt!r}")
+
+
+def filename(stem: str, fmt: str) -> str:
+    """``stem.fmt`` (the download's name)."""
+    return f"{stem}.{fmt}"

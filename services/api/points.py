@@ -1,0 +1,228 @@
+"""Front points made on demand by the API: a point's decoded motion and its Rerun recording.
+
+Where the work runs — the API, in-process, not a worker: decoding one point is one trajectory
+evaluation of a problem whose size was checked at submission (``LEGOPT_MAX_*``), and its
+recording is capped by the writer's size budget, so it takes well under a second once the
+problem is built (seconds for the first point of a spec, which builds the problem and may
+compile numba kernels). A worker would add a queue round trip to every click and compete with
+optimisations for the job slots.
+
+Bounds: ONE point is made at a time per API process (a single-thread executor); a request
+waits for its point at most ``WAIT_S`` seconds and then gets 503 with ``Retry-After`` while the
+work finishes in the background — its result is kept, so the retry is served from the cache.
+Two requests for the same point share one piece of work. Recordings are cached in the
+artifact store as the job's artifact ``point-<k>`` (``.rrd``, SHA-256 recorded), inside the
+directory of the attempt whose result they decode, so they are deleted with the job and count
+against the key's storage quota; motions are kept in a small in-process LRU.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import TimeoutError as FutureTimeout
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+from fastapi import HTTPException, status
+
+from services.api.deps import ApiContext
+from services.store import output_queries as oq
+from services.store import repository as repo
+from services.store.records import ArtifactRecord, JobRecord
+
+T = TypeVar("T")
+
+#: Longest a request waits for a point being made before it gets 503 + Retry-After (s).
+WAIT_S = 30.0
+#: Decoded motions kept per process.
+MOTION_CACHE_SIZE = 64
+#: Generations whose fronts a point recording replays (the most recent ones beyond this).
+MAX_FRONT_GENERATIONS = 2000
+
+_executor: ThreadPoolExecutor | None = None
+_pending: dict[tuple[str, str], Future[Any]] = {}
+_lock = threading.Lock()
+_motions: OrderedDict[tuple[str, str], dict[str, Any]] = OrderedDict()
+
+
+def point_kind(k: int) -> str:
+    """The artifact kind of front point ``k``'s recording."""
+    return f"point-{k}"
+
+
+def _run(key: tuple[str, str], work: Callable[[], T]) -> T:
+    """Run ``work`` on the process's point thread (shared by identical concurrent requests);
+    503 with Retry-After when it takes longer than ``WAIT_S``."""
+    global _executor
+    with _lock:
+        if _executor is None:
+            _executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="legopt-point")
+        future = _pending.get(key)
+        if future is None:
+            future = _executor.submit(work)
+            _pending[key] = future
+            future.add_done_callback(lambda _f: _forget(key))
+    try:
+        return future.result(timeout=WAIT_S)
+    except FutureTimeout:
+        raise HTTPException(
+            status.HTTP_503_SERVICE_UNAVAILABLE,
+            f"{key[1]} of job {key[0]} is still being made (one at a time per API process); "
+            "retry in a few seconds",
+            headers={"Retry-After": "5"},
+        ) from None
+
+
+def _forget(key: tuple[str, str]) -> None:
+    with _lock:
+        _pending.pop(key, None)
+
+
+def _point_error(exc: Exception) -> HTTPException:
+    return HTTPException(status.HTTP_409_CONFLICT, str(exc))
+
+
+def _attempt_dir(ctx: ApiContext, job_id: str) -> str | None:
+    """The attempt directory of the job's stored result (``<job>/<attempt>/result.json``)."""
+    with ctx.read() as session:
+        art = repo.get_artifact(session, job_id, "result")
+    if art is None:
+        return None
+    parts = art.relative_path.split("/")
+    return parts[1] if len(parts) == 3 else None
+
+
+def _fronts(ctx: ApiContext, job_id: str) -> dict[int, Any] | None:
+    """{generation: F} of the job's stored per-generation fronts (the latest ones)."""
+    fronts: dict[int, Any] = {}
+    after: int | None = None
+    with ctx.read() as session:
+        while len(fronts) < MAX_FRONT_GENERATIONS:
+            rows = repo.list_generations(session, job_id, after=after, limit=1000)
+            for g in rows:
+                if g.front:
+                    fronts[g.generation] = np.asarray(g.front, dtype=float)
+            if len(rows) < 1000:
+                break
+            after = rows[-1].generation
+    return fronts or None
+
+
+def point_recording(ctx: ApiContext, job: JobRecord, k: int) -> ArtifactRecord:
+    """The stored recording of front point ``k`` of a succeeded job, made first if needed.
+    404 for no such point, 409 when the point cannot be decoded, 503 while it is being made."""
+    kind = point_kind(k)
+    with ctx.read() as session:
+        existing = repo.get_artifact(session, job.id, kind)
+        point = oq.get_pareto_point(session, job.id, k)
+    if existing is not None:
+        return existing
+    if point is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {k}")
+
+    def make() -> ArtifactRecord:
+        from services.worker.point_recording import PointError, decode_point, write_point_recording
+
+        with ctx.read() as session:
+            done = repo.get_artifact(session, job.id, kind)
+            if done is not None:
+                return done
+            spec = repo.job_spec(session, job)
+            result = repo.get_result(session, job.id)
+            points = repo.list_pareto(session, job.id)
+        summary = result.summary if result is not None and isinstance(result.summary, dict) else {}
+        try:
+            decoded = decode_point(spec, point.x)
+        except PointError as exc:
+            raise _point_error(exc) from None
+        store = ctx.artifacts
+        attempt = _attempt_dir(ctx, job.id)
+        with tempfile.TemporaryDirectory(prefix="legopt-point-") as tmp:
+            path = Path(tmp) / f"{kind}.rrd"
+            write_point_recording(
+                decoded,
+                path,
+                title=f"{(spec or {}).get('name') or job.id[:8]}: front point {k}",
+                recording_id=f"{job.id}-{kind}",
+                pareto=[{"x": p.x, "objectives": p.objectives} for p in points],
+                history=list(summary.get("history") or []),
+                fronts=_fronts(ctx, job.id),
+            )
+            stored = store.put(job.id, kind, path, attempt=attempt)
+        with ctx.write() as session:
+            oq.add_artifact(session, job.id, kind, *stored)
+            record = repo.get_artifact(session, job.id, kind)
+        assert record is not None
+        return record
+
+    return _run((job.id, kind), make)
+
+
+def point_motion(
+    ctx: ApiContext, job: JobRecord, *, point: int | None, baseline: str | None
+) -> dict[str, Any]:
+    """The decoded solution (front point, baseline, or the reported best when neither) of a
+    succeeded job: its objectives, metrics and joint signals (``MotionOut`` fields)."""
+    source = "point" if point is not None else "baseline" if baseline is not None else "best"
+    ident = f"motion:{source}:{point if point is not None else baseline or ''}"
+    key = (job.id, ident)
+    with _lock:
+        cached = _motions.get(key)
+        if cached is not None:
+            _motions.move_to_end(key)
+            return cached
+    with ctx.read() as session:
+        spec = repo.job_spec(session, job)
+        result = repo.get_result(session, job.id)
+        stored = oq.get_pareto_point(session, job.id, point) if point is not None else None
+    if result is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no result yet")
+    if point is not None and stored is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {point}")
+
+    def make() -> dict[str, Any]:
+        from services.worker.point_recording import (
+            PointError,
+            decode_baseline,
+            decode_point,
+            motion_payload,
+        )
+
+        try:
+            if baseline is not None:
+                decoded = decode_baseline(spec, baseline)
+            else:
+                x = stored.x if stored is not None else result.best_x
+                decoded = decode_point(spec, x or [])
+        except PointError as exc:
+            raise _point_error(exc) from None
+        sol = decoded.solution
+        return {
+            "job_id": job.id,
+            "source": source,
+            "index": point,
+            "name": baseline,
+            "x": None if sol.x is None else [float(v) for v in sol.x],
+            "objectives": {k: float(v) for k, v in sol.objectives.items()},
+            "metrics": {
+                k: float(v)
+                for k, v in sol.metrics.items()
+                if isinstance(v, int | float) and np.isfinite(v)
+            },
+            **motion_payload(sol.motion),
+        }
+
+    payload = _run(key, make)
+    with _lock:
+        _motions[key] = payload
+        while len(_motions) > MOTION_CACHE_SIZE:
+            _motions.popitem(last=False)
+    return payload
+
+
+__all__ = ["WAIT_S", "point_kind", "point_motion", "point_recording"]

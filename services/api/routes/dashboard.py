@@ -1,0 +1,237 @@
+"""The dashboard's listings: the jobs page (filter, sort, search, paging in SQL), the choices
+of its filters, and a robot's joints, limits, masses and the study kinds that accept it."""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Depends, HTTPException, Query
+from fastapi.concurrency import run_in_threadpool
+
+from legcore.robots import LeggedRobot, Robot, catalog
+from services.api.dashboard_schemas import (
+    Choice,
+    DashboardOptions,
+    JobRowOut,
+    JobRowPage,
+    JointOut,
+    RobotView,
+    StudyFit,
+)
+from services.api.deps import MAX_OFFSET, ApiContext, Context, CurrentKey
+from services.api.errors import invalid, not_found
+from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT, ErrorOut
+from services.api.spec_cache import build_robot_cached
+from services.api.validation import summarize_robot
+from services.store import dashboard_queries as dq
+from services.store import repository as repo
+from services.store.tables import JobStatus
+
+router = APIRouter(tags=["dashboard"])
+
+OPTIMIZERS = ("ga", "hka", "moead", "nsga2")
+
+
+def sync_labels(ctx: ApiContext, owner_key_id: str) -> None:
+    """Write the labels of the key's new jobs (a read first: the write lock only when some are
+    missing)."""
+    with ctx.read() as session:
+        missing = dq.missing_labels(session, owner_key_id)
+    if missing:
+        with ctx.write() as session:
+            dq.sync_labels(session, owner_key_id)
+
+
+def job_filter(
+    status_: Annotated[
+        list[JobStatus] | None, Query(alias="status", description="Only these statuses.")
+    ] = None,
+    kind: Annotated[str | None, Query(max_length=64, description="Study kind.")] = None,
+    optimizer: Annotated[str | None, Query(max_length=32, description="Optimizer kind.")] = None,
+    robot: Annotated[str | None, Query(max_length=200, description="Robot name.")] = None,
+    sweep_id: Annotated[str | None, Query(max_length=64, description="Only this sweep.")] = None,
+    tag: Annotated[str | None, Query(max_length=100, description="Jobs with this tag.")] = None,
+    q: Annotated[
+        str | None,
+        Query(
+            max_length=200,
+            description="Words matched in name, kind, robot, optimizer, "
+            "tags, seed (`seed=3`), job and sweep ids.",
+        ),
+    ] = None,  # fmt: skip
+) -> dq.JobFilter:
+    """The filters of the jobs page (query parameters)."""
+    return dq.JobFilter(
+        status=tuple(status_ or ()),
+        kind=kind or None,
+        optimizer=optimizer or None,
+        robot=robot or None,
+        sweep_id=sweep_id or None,
+        tag=tag or None,
+        search=(q or "").strip() or None,
+    )
+
+
+Filters = Annotated[dq.JobFilter, Depends(job_filter)]
+
+
+@router.get(
+    "/dashboard/jobs",
+    response_model=JobRowPage,
+    summary="The jobs page: your jobs filtered, sorted and searched",
+)
+def dashboard_jobs(
+    key: CurrentKey,
+    ctx: Context,
+    filters: Filters,
+    sort: Annotated[
+        Literal["created", "finished", "status", "kind", "robot", "optimizer", "progress", "best"],
+        Query(description="Column to sort by."),
+    ] = "created",
+    order: Annotated[Literal["asc", "desc"], Query()] = "desc",
+    limit: Annotated[int, Query(ge=1, le=MAX_LIMIT)] = DEFAULT_LIMIT,
+    offset: Annotated[int, Query(ge=0, le=MAX_OFFSET)] = 0,
+    cursor: Annotated[
+        str | None,
+        Query(max_length=200, description="`next_cursor` of the previous page (sort=created)."),
+    ] = None,
+) -> JobRowPage:
+    """Study kind, robot, optimizer, status, progress, best value so far, times and tags of
+    each job. Everything is filtered, sorted and paged in the database (indexed), so a page
+    costs about the same at 10^5 jobs as at 10; with the default order pass `cursor` (the
+    previous page's `next_cursor`) to page by keyset instead of `offset`."""
+    sync_labels(ctx, key.id)
+    with ctx.read() as session:
+        try:
+            page = dq.list_job_rows(
+                session, key.id, filters, sort=sort, descending=order == "desc",
+                limit=limit, offset=offset, cursor=cursor,
+            )  # fmt: skip
+        except ValueError as exc:
+            raise invalid(("query", "cursor"), str(exc)) from None
+    return JobRowPage(
+        items=[JobRowOut.from_row(r) for r in page.items],
+        total=page.total,
+        limit=page.limit,
+        offset=page.offset,
+        next_cursor=page.next_cursor,
+    )
+
+
+@router.get(
+    "/dashboard/options",
+    response_model=DashboardOptions,
+    summary="What the jobs page's filters offer",
+)
+def dashboard_options(key: CurrentKey) -> DashboardOptions:
+    """Study kinds (with their titles), optimizers, statuses and sort columns."""
+    from legcore.problems.registry import studies
+
+    return DashboardOptions(
+        kinds=[Choice(value=k, label=s.title) for k, s in sorted(studies().items())],
+        optimizers=[Choice(value=o, label=o.upper()) for o in OPTIMIZERS],
+        statuses=[s.value for s in JobStatus],
+        sorts=list(dq.SORT_KEYS),
+    )
+
+
+# --------------------------------------------------------------------------- robots
+
+_FIT_CACHE: OrderedDict[str, list[StudyFit]] = OrderedDict()
+_FIT_LOCK = threading.Lock()
+
+
+def _finite(v: Any) -> float | None:
+    f = float(v)
+    return f if f == f and abs(f) != float("inf") and abs(f) < 1e300 else None
+
+
+def _joints(robot: Robot, leg: str | None = None) -> list[JointOut]:
+    names = list(robot.model.names)[1:]
+    return [
+        JointOut(
+            name=name,
+            leg=leg,
+            lower=_finite(robot.q_min[i]),
+            upper=_finite(robot.q_max[i]),
+            velocity=_finite(robot.qd_max[i]),
+            effort=_finite(robot.tau_max[i]),
+            link_mass_kg=_finite(robot.chain.mass[i]) if i < robot.chain.n else None,
+        )
+        for i, name in enumerate(names)
+    ]
+
+
+def study_fits(cache_key: str, robot: Robot | LeggedRobot) -> list[StudyFit]:
+    """Each study kind, and whether it accepts ``robot`` with its default parameters (the
+    study's own checks: kind of robot, capabilities, reach), with the reason when not."""
+    from legcore.problems.registry import studies
+
+    with _FIT_LOCK:
+        if cache_key in _FIT_CACHE:
+            return _FIT_CACHE[cache_key]
+    kind = "legged" if isinstance(robot, LeggedRobot) else "serial"
+    fits = []
+    for name, study in sorted(studies().items()):
+        if kind not in study.robot_kinds:
+            need = f"needs a {' or '.join(study.robot_kinds)} robot"
+            fits.append(StudyFit(kind=name, title=study.title, accepts=False, reason=need))
+            continue
+        try:
+            study.build(robot, study.params(kind=name))
+        except (ValueError, KeyError, TypeError, ArithmeticError) as exc:
+            fits.append(StudyFit(kind=name, title=study.title, accepts=False, reason=str(exc)))
+            continue
+        fits.append(StudyFit(kind=name, title=study.title, accepts=True))
+    with _FIT_LOCK:
+        _FIT_CACHE[cache_key] = fits
+        while len(_FIT_CACHE) > 32:
+            _FIT_CACHE.popitem(last=False)
+    return fits
+
+
+def _robot_view(ident: str, name: str, robot: Robot | LeggedRobot, cache_key: str) -> RobotView:
+    s = summarize_robot(robot)
+    if isinstance(robot, LeggedRobot):
+        joints = [j for leg in robot.legs for j in _joints(leg.robot, leg.name)]
+        legs = [leg.name for leg in robot.legs]
+    else:
+        joints, legs = _joints(robot), []
+    return RobotView(
+        id=ident, name=name, kind=s.kind, nq=s.nq, mass_kg=s.mass_kg, legs=legs,
+        joints=joints, studies=study_fits(cache_key, robot),
+    )  # fmt: skip
+
+
+@router.get(
+    "/dashboard/robots/{robot_id}",
+    response_model=RobotView,
+    summary="A robot's joints, limits, masses and the study kinds that accept it",
+    responses={404: {"model": ErrorOut, "description": "No such robot (among yours)."}},
+)
+async def dashboard_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotView:
+    """Your robot ``robot_id`` or a catalog robot: per joint its position limits (rad or m),
+    velocity and effort limits and the mass of the link it moves (kg); per study kind whether
+    it accepts the robot with its default parameters, and why not."""
+    if robot_id in catalog.names():
+        robot = catalog.get(robot_id)
+        return await run_in_threadpool(_robot_view, robot_id, robot_id, robot, f"c:{robot_id}")
+
+    def stored() -> RobotView:
+        with ctx.read() as session:
+            record = repo.get_robot(session, robot_id, owner_key_id=key.id)
+        if record is None:
+            raise not_found("robot", robot_id)
+        spec = record.spec if isinstance(record.spec, dict) else {}
+        if "catalog" in spec:
+            built: Robot | LeggedRobot = catalog.get(str(spec["catalog"]))
+        else:
+            try:
+                built = build_robot_cached(spec)
+            except ValueError as exc:
+                raise HTTPException(409, f"robot {record.name!r} cannot be built: {exc}") from None
+        return _robot_view(record.id, record.name, built, f"r:{record.id}")
+
+    return await run_in_threadpool(stored)

@@ -1,0 +1,169 @@
+"""Downloads as CSV, JSON or Parquet: the job list (with the jobs page's filters), a job's
+front and history, a sweep's cell table. ``legopt export`` calls the same routes."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query
+from fastapi.responses import StreamingResponse
+
+from services.api.deps import ApiContext, Context, CurrentKey
+from services.api.export_formats import MEDIA_TYPES, ExportFormat, encode, filename
+from services.api.routes.dashboard import Filters, sync_labels
+from services.api.routes.jobs import owned_job
+from services.api.routes.sweep_views import cell_table
+from services.api.schemas import ErrorOut, objective_names
+from services.api.sweep_cells import mean_sd
+from services.store import dashboard_queries as dq
+from services.store import repository as repo
+
+router = APIRouter(tags=["exports"])
+
+FormatQuery = Annotated[ExportFormat, Query(description="csv, json or parquet.")]
+_FILE: dict[int | str, dict[str, Any]] = {
+    200: {"content": {m: {} for m in MEDIA_TYPES.values()}, "description": "The file."},
+    404: {"model": ErrorOut, "description": "Not found (among yours)."},
+}
+JOB_COLUMNS = (
+    "id", "name", "kind", "robot", "optimizer", "seed", "tags", "status", "sweep_id",
+    "generation", "total_generations", "progress", "best", "created_at", "started_at",
+    "finished_at", "error",
+)  # fmt: skip
+#: Jobs read per query while the job list streams.
+EXPORT_PAGE = 1000
+
+
+def _download(fmt: str, stem: str, columns: Any, rows: Any) -> StreamingResponse:
+    return StreamingResponse(
+        encode(fmt, list(columns), rows),
+        media_type=MEDIA_TYPES[fmt],
+        headers={"Content-Disposition": f'attachment; filename="{filename(stem, fmt)}"'},
+    )
+
+
+def _first(best: Any) -> Any:
+    return best[0] if isinstance(best, list) and best else best
+
+
+def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tuple[Any, ...]]:
+    """Every job matching ``filters``, newest first, read by keyset pages."""
+    cursor: str | None = None
+    while True:
+        with ctx.read() as session:
+            page = dq.list_job_rows(
+                session, key_id, filters, limit=EXPORT_PAGE, cursor=cursor, count=False
+            )
+        for r in page.items:
+            j = r.job
+            yield (
+                j.id, r.name, r.kind, r.robot, r.optimizer, r.seed, ",".join(r.tags),
+                j.status.value, j.sweep_id, j.progress_generation, j.total_generations,
+                round(j.progress, 6), _first(j.best_objective), j.created_at, j.started_at,
+                j.finished_at, j.error_message,
+            )  # fmt: skip
+        if page.next_cursor is None:
+            return
+        cursor = page.next_cursor
+
+
+@router.get(
+    "/export/jobs", summary="Your job list as CSV, JSON or Parquet", responses=_FILE,
+    response_class=StreamingResponse,
+)  # fmt: skip
+def export_jobs(
+    key: CurrentKey, ctx: Context, filters: Filters, format: FormatQuery = "csv"
+) -> StreamingResponse:
+    """Every job matching the jobs page's filters (newest first): labels, status, progress,
+    best value so far (first objective) and times."""
+    sync_labels(ctx, key.id)
+    return _download(format, "jobs", JOB_COLUMNS, job_rows(ctx, key.id, filters))
+
+
+@router.get(
+    "/jobs/{job_id}/front/export",
+    summary="A job's final front as CSV, JSON or Parquet",
+    responses=_FILE,
+    response_class=StreamingResponse,
+)
+def export_front(
+    job_id: str, key: CurrentKey, ctx: Context, format: FormatQuery = "csv"
+) -> StreamingResponse:
+    """One row per front point: its index, each objective (by name) and each decision
+    variable (x1, x2, …)."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        points = repo.list_pareto(session, job.id)
+        names = objective_names(repo.get_result_objectives(session, job.id))
+    m = max((len(p.objectives or []) for p in points), default=len(names))
+    names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
+    n = max((len(p.x or []) for p in points), default=0)
+    columns = ["index", *names, *[f"x{i + 1}" for i in range(n)]]
+    rows = ((p.index, *_pad(p.objectives, m), *_pad(p.x, n)) for p in points)
+    return _download(format, f"job-{job.id[:8]}-front", columns, rows)
+
+
+def _pad(values: Any, n: int) -> list[Any]:
+    values = list(values or [])
+    return values + [None] * (n - len(values))
+
+
+@router.get(
+    "/jobs/{job_id}/history/export",
+    summary="A job's per-generation history as CSV, JSON or Parquet",
+    responses=_FILE,
+    response_class=StreamingResponse,
+)
+def export_history(
+    job_id: str, key: CurrentKey, ctx: Context, format: FormatQuery = "csv"
+) -> StreamingResponse:
+    """One row per generation: evaluations so far, best value of each objective so far, the
+    hypervolume (against the job's reference point) and the generation's wall time (s)."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        names = objective_names(repo.get_result_objectives(session, job.id))
+        rows: list[Any] = []
+        after: int | None = None
+        while True:
+            chunk = repo.list_generations(session, job.id, after=after, limit=1000)
+            rows.extend(chunk)
+            if len(chunk) < 1000:
+                break
+            after = chunk[-1].generation
+    m = max((len(g.best) if isinstance(g.best, list) else 1 for g in rows), default=len(names))
+    names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
+    columns = ["generation", "n_evals", *[f"best_{n}" for n in names], "hypervolume",
+               "wall_time_s"]  # fmt: skip
+    data = (
+        (g.generation, g.n_evals, *_pad(g.best if isinstance(g.best, list) else [g.best], m),
+         g.hypervolume, g.wall_time_s)
+        for g in rows
+    )  # fmt: skip
+    return _download(format, f"job-{job.id[:8]}-history", columns, data)
+
+
+@router.get(
+    "/sweeps/{sweep_id}/cells/export",
+    summary="A sweep's cell table as CSV, JSON or Parquet",
+    responses=_FILE,
+    response_class=StreamingResponse,
+)
+def export_cells(
+    sweep_id: str, key: CurrentKey, ctx: Context, format: FormatQuery = "csv"
+) -> StreamingResponse:
+    """One row per cell: the swept values, job counts, then ``<column>_mean``, ``<column>_sd``
+    and ``<column>_n`` of each objective, the hypervolume and each metric."""
+    sweep, table = cell_table(ctx, key.id, sweep_id)
+    stats = [f"{c}_{s}" for c in table.stat_columns for s in ("mean", "sd", "n")]
+    columns = ["cell", *table.columns, "jobs", "succeeded", "seeds", *stats]
+    rows = []
+    for c in table.cells:
+        row: list[Any] = [c.index, *[c.values.get(p) for p in table.columns], len(c.job_ids),
+                          c.counts.get("succeeded", 0), c.seeds]  # fmt: skip
+        for col in table.stat_columns:
+            samples = c.samples.get(col, [])
+            mean, sd = mean_sd(samples)
+            row += [mean, sd, len(samples)]
+        rows.append(row)
+    return _download(format, f"sweep-{sweep.id[:8]}-cells", columns, rows)

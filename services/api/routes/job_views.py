@@ -1,0 +1,209 @@
+"""One job as the dashboard shows it: its spec as YAML, its front with labelled objectives and
+baselines, any solution's motion decoded again, and a front point's Rerun recording."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import yaml
+from fastapi import APIRouter, HTTPException, Query, Response, status
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import FileResponse
+
+from services.api.dashboard_schemas import (
+    BaselineMark,
+    FrontOut,
+    FrontPointOut,
+    MotionOut,
+    Quantity,
+    quantities,
+)
+from services.api.deps import Context, CurrentKey
+from services.api.points import point_motion, point_recording
+from services.api.routes.jobs import owned_job
+from services.api.schemas import ErrorOut, objective_names
+from services.store import output_queries as oq
+from services.store import repository as repo
+from services.store.errors import ArtifactError
+from services.store.records import BaselineRecord, JobRecord
+from services.store.tables import JobStatus
+
+router = APIRouter(tags=["dashboard"])
+
+_404: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorOut, "description": "No such job (among yours), or no such point."}
+}
+_POINT_ERRORS: dict[int | str, dict[str, Any]] = {
+    **_404,
+    409: {"model": ErrorOut, "description": "The job has no result, or the point cannot be "
+          "decoded with its spec."},
+    503: {"model": ErrorOut, "description": "Still being made (one at a time): retry after "
+          "`Retry-After` seconds."},
+}  # fmt: skip
+
+
+def _num(v: Any) -> float | None:
+    return float(v) if isinstance(v, int | float) and v == v and abs(v) != float("inf") else None
+
+
+def _succeeded(job: JobRecord, what: str) -> None:
+    if job.status is not JobStatus.SUCCEEDED:
+        raise HTTPException(
+            status.HTTP_409_CONFLICT,
+            f"job {job.id} is {job.status.value}: {what} exists once it succeeded",
+        )
+
+
+@router.get(
+    "/jobs/{job_id}/spec.yaml",
+    summary="The job's spec as YAML (what `legopt run` and `legopt submit` take)",
+    responses={200: {"content": {"application/yaml": {}}}, **_404},
+)
+def get_spec_yaml(job_id: str, key: CurrentKey, ctx: Context) -> Response:
+    """The spec the job runs (stored robots substituted), as a downloadable YAML file."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        spec = repo.job_spec(session, job)
+    text = yaml.safe_dump(spec, sort_keys=False, allow_unicode=True)
+    return Response(
+        text,
+        media_type="application/yaml",
+        headers={"Content-Disposition": f'attachment; filename="job-{job.id[:8]}.yaml"'},
+    )
+
+
+def _baseline_mark(b: BaselineRecord, names: list[str]) -> BaselineMark | None:
+    doc: dict[str, Any] = b.metrics if isinstance(b.metrics, dict) else {}
+    raw_obj, raw_met = doc.get("objectives"), doc.get("metrics")
+    objectives: dict[str, Any] = raw_obj if isinstance(raw_obj, dict) else {}
+    metrics: dict[str, Any] = raw_met if isinstance(raw_met, dict) else doc
+    values = [_num(objectives.get(n)) for n in names]
+    return BaselineMark(
+        name=b.name,
+        objectives=values,
+        metrics={k: v for k, v in metrics.items() if isinstance(v, int | float | str | bool)},
+    )
+
+
+@router.get(
+    "/jobs/{job_id}/front",
+    response_model=FrontOut,
+    summary="The final front with labelled objectives, the best point and the baselines",
+    responses=_404,
+)
+def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
+    """Every point of the final front (objectives and decision vector), the objectives' and
+    metrics' readable names and units, the index of the reported optimum on the front, the
+    baselines (the study's reference solutions, e.g. the paper's) by objective, and the
+    reference point of the job's hypervolumes. Empty until the job succeeded."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+        points = repo.list_pareto(session, job.id)
+        result = repo.get_result(session, job.id)
+        baselines = repo.list_baselines(session, job.id)
+        ref = oq.get_hypervolume_ref(session, job.id)
+        spec = repo.job_spec(session, job)
+    problem = spec.get("problem") if isinstance(spec, dict) else None
+    kind = problem.get("kind") if isinstance(problem, dict) else None
+    objectives = result.objectives if result is not None else None
+    names = objective_names(objectives)
+    if not names and points:
+        names = [f"f{i + 1}" for i in range(len(points[0].objectives or []))]
+    n_var = max((len(p.x or []) for p in points), default=0)
+    best_index = None
+    if result is not None and points and isinstance(objectives, dict):
+        target = [_num((objectives.get("values") or {}).get(n)) for n in names]
+        if all(v is not None for v in target):
+            dist = [
+                sum(
+                    (float(a or 0) - float(b or 0)) ** 2
+                    for a, b in zip(p.objectives, target, strict=False)
+                )
+                for p in points
+            ]
+            best_index = points[dist.index(min(dist))].index
+    marks = [m for b in baselines if (m := _baseline_mark(b, names)) is not None]
+    metrics = sorted((result.metrics or {}).keys()) if result is not None else []
+    return FrontOut(
+        job_id=job.id,
+        status=job.status,
+        objectives=quantities(names, kind),
+        variables=[
+            Quantity(name=f"x{i + 1}", label=f"x{i + 1}", unit="", axis=f"x{i + 1}")
+            for i in range(n_var)
+        ],
+        metrics=quantities(metrics, kind),
+        points=[
+            FrontPointOut(
+                index=p.index,
+                objectives=[_num(v) for v in p.objectives or []],
+                x=[_num(v) for v in p.x or []],
+            )
+            for p in points
+        ],
+        best_index=best_index,
+        baselines=marks,
+        hypervolume_ref=ref,
+    )
+
+
+@router.get(
+    "/jobs/{job_id}/motion",
+    response_model=MotionOut,
+    summary="One solution's motion, decoded again: a front point, a baseline, or the optimum",
+    responses=_POINT_ERRORS,
+)
+async def get_motion(
+    job_id: str,
+    key: CurrentKey,
+    ctx: Context,
+    point: Annotated[int | None, Query(ge=0, le=10**9, description="Front point index.")] = None,
+    baseline: Annotated[str | None, Query(max_length=200, description="Baseline name.")] = None,
+) -> MotionOut:
+    """The joint signals (q, qd, qdd, jerk, τ, power per joint, at most 400 samples), the
+    cumulative energy, objectives and metrics of the front point ``point`` or the baseline
+    ``baseline`` (neither: the reported optimum), decoded from its stored decision vector."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+    _succeeded(job, "its motion")
+    payload = await run_in_threadpool(point_motion, ctx, job, point=point, baseline=baseline)
+    out = MotionOut(**payload)
+    if point is not None:
+        out.recording_url = f"{ctx.prefix}/jobs/{job.id}/pareto/{point}/recording"
+    return out
+
+
+@router.get(
+    "/jobs/{job_id}/pareto/{k}/recording",
+    response_class=FileResponse,
+    summary="The Rerun recording of front point k (made on demand, then cached)",
+    responses={
+        200: {"content": {"application/octet-stream": {}}, "description": "The .rrd file."},
+        **_POINT_ERRORS,
+    },
+)
+async def get_point_recording(job_id: str, k: str, key: CurrentKey, ctx: Context) -> FileResponse:
+    """The ``.rrd`` of the job's recording with front point ``k`` as its motion (the same
+    baselines, history and fronts), decoded from the point's stored decision vector on the
+    first request and kept as the job's artifact ``point-<k>``; checked against its SHA-256
+    before it is sent (``X-Checksum-SHA256``). Also ``legopt replay JOB --point K``."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+    if not k.isdigit() or len(k) > 9:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {k!r}")
+    _succeeded(job, "a point's recording")
+    artifact = await run_in_threadpool(point_recording, ctx, job, int(k))
+    store = ctx.artifacts
+    try:
+        store.verify(artifact.relative_path, artifact.sha256)
+        path = store.path(artifact.relative_path)
+    except FileNotFoundError:
+        raise ArtifactError(
+            f"the recording of point {k} of job {job.id} is missing from the artifact store"
+        ) from None
+    return FileResponse(
+        path,
+        media_type="application/octet-stream",
+        filename=f"{job.id}-point-{int(k)}.rrd",
+        headers={"X-Checksum-SHA256": artifact.sha256},
+    )

@@ -1,0 +1,145 @@
+"""``GET /studies``: the study kinds, their parameters, and which robots each accepts.
+
+For every kind (built-in or registered by a plug-in, see docs/plugins.md): its parameter JSON
+Schema and defaults (what ``problem`` of a job spec takes), the default robot, optimiser and
+budget, what it needs from a robot in words, and for each catalog robot and each of the
+caller's stored robots whether the study accepts it and, if not, why (the same message a job
+with that robot gets as a 422 at ``robot``).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Query
+from pydantic import BaseModel, Field
+
+from legcore.problems.registry import needs_text, plugin_errors, studies
+from legcore.problems.study import Study
+from legcore.robots import LeggedRobot, Robot, catalog
+from services.api.deps import Context, CurrentKey
+from services.api.errors import invalid
+from services.api.spec_cache import build_robot_cached
+from services.store import repository as repo
+
+log = logging.getLogger("legopt.api")
+
+router = APIRouter(tags=["studies"])
+
+#: Stored robots checked per request (the caller's first ones by name).
+MAX_STORED_ROBOTS = 100
+
+
+class RobotFit(BaseModel):
+    """Whether a study accepts one robot."""
+
+    robot: str = Field(description="Catalog name, or the stored robot's name.")
+    id: str = Field(description="What a job spec's `robot` takes: the catalog name or the id.")
+    source: Literal["catalog", "stored"]
+    accepted: bool
+    reason: str | None = Field(
+        description="Why the study refuses the robot (naming the missing capability)."
+    )
+
+
+class StudyOut(BaseModel):
+    """One study kind."""
+
+    kind: str
+    title: str
+    description: str
+    seed_paper: str = Field(description="The seed paper whose settings are the defaults.")
+    plugin: str | None = Field(description="The distribution that registered it (plug-ins).")
+    robot_kinds: list[str] = Field(description="serial and/or legged")
+    needs: list[str] = Field(description="What it needs from a robot: one line per alternative.")
+    default_robot: str
+    default_optimizer: dict[str, Any]
+    default_generations: int
+    params_schema: dict[str, Any] = Field(description="JSON Schema of the job's `problem`.")
+    defaults: dict[str, Any] = Field(description="`problem` with every default filled in.")
+    robots: list[RobotFit]
+
+
+class StudiesOut(BaseModel):
+    """``GET /studies``."""
+
+    items: list[StudyOut]
+    stored_robots_checked: int = Field(description="How many of your robots were checked.")
+    stored_robots_total: int
+    plugin_errors: dict[str, str] = Field(
+        description="Plug-ins that could not be loaded (entry point -> error)."
+    )
+
+
+def _fit(study: Study, name: str, ident: str, source: str, robot: Any) -> RobotFit:
+    if isinstance(robot, str):  # the robot could not be built
+        return RobotFit(robot=name, id=ident, source=source, accepted=False,  # type: ignore[arg-type]
+                        reason=robot)
+    try:
+        reason = study.refusal(robot)
+    except Exception as exc:  # a plug-in's check failing must not fail the listing
+        log.warning("refusal check of %s failed: %r", study.kind, exc)
+        reason = f"{study.kind} could not check this robot: {type(exc).__name__}: {exc}"
+    return RobotFit(robot=name, id=ident, source=source,  # type: ignore[arg-type]
+                    accepted=reason is None, reason=reason)
+
+
+def _stored(spec: Any) -> Robot | LeggedRobot | str:
+    try:
+        if isinstance(spec, dict) and "catalog" in spec:
+            return catalog.get(str(spec["catalog"]))
+        return build_robot_cached(spec)
+    except Exception as exc:  # stored robots were validated; an upgrade may still refuse one
+        return f"the robot cannot be built: {type(exc).__name__}: {exc}"
+
+
+@router.get("/studies", response_model=StudiesOut, summary="Study kinds, parameters and robots")
+def list_studies(
+    key: CurrentKey,
+    ctx: Context,
+    kind: Annotated[
+        str | None, Query(description="Only this study kind.", max_length=100)
+    ] = None,
+    robots: Annotated[
+        bool, Query(description="Check the catalog robots and yours against each kind.")
+    ] = True,
+) -> StudiesOut:
+    """Every study kind (built-in and plug-ins) with its parameter schema and defaults, and for
+    each catalog robot and each of your stored robots (your first 100 by name) whether it is
+    accepted, with the reason when it is not."""
+    known = studies()
+    if kind is not None and kind not in known:
+        raise invalid(("query", "kind"), f"unknown study {kind!r}; expected one of "
+                                          f"{sorted(known)}")
+    chosen = [known[kind]] if kind is not None else list(known.values())
+    candidates: list[tuple[str, str, str, Any]] = []
+    checked = total = 0
+    if robots:
+        candidates = [(n, n, "catalog", catalog.get(n)) for n in catalog.names()]
+        with ctx.read() as session:
+            page = repo.list_robots(session, owner_key_id=key.id, limit=MAX_STORED_ROBOTS)
+            records = [(r.name, r.id, r.spec) for r in page.items]
+            total = page.total
+        candidates += [(name, rid, "stored", _stored(spec)) for name, rid, spec in records]
+        checked = len(records)
+    items = [
+        StudyOut(
+            kind=s.kind,
+            title=s.title,
+            description=s.description,
+            seed_paper=s.seed_paper,
+            plugin=s.plugin,
+            robot_kinds=list(s.robot_kinds),
+            needs=needs_text(s),
+            default_robot=s.default_robot,
+            default_optimizer=s.default_optimizer,
+            default_generations=s.default_generations,
+            params_schema=s.params.model_json_schema(),
+            defaults=s.params.model_validate({}).model_dump(mode="json"),
+            robots=[_fit(s, *c) for c in candidates],
+        )
+        for s in chosen
+    ]
+    return StudiesOut(items=items, stored_robots_checked=checked, stored_robots_total=total,
+                      plugin_errors=plugin_errors())

@@ -1,0 +1,384 @@
+"""What the CLI prints about a result: one compact block per study, or the full tables.
+
+Both views read a :class:`ResultView` — a finished job's objectives, metrics, baselines and
+per-joint table, from the API's result document (:meth:`ResultView.from_api`) or from an
+in-process ``RunResult.to_dict()`` (:meth:`ResultView.from_run`). Names and units come from
+`legcore.problems.metric_names`; the papers' own numbers from
+``examples/papers/paper_numbers.yaml``.
+
+Conventions: numbers have 4 significant digits; a quantity the user maximises is shown
+positive (``neg_score`` → ``score``); a metric that repeats another (``same_as``) is not shown.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from functools import cache
+from typing import Any
+
+from rich import box
+from rich.console import Group, RenderableType
+from rich.table import Table
+from rich.text import Text
+
+from legcore.problems.metric_names import (
+    STUDY_DISPLAY,
+    MetricName,
+    baseline_name,
+    display_objective,
+    joint_row_name,
+    metric_name,
+)
+from services.paper_numbers import dotted, paper_entry
+
+__all__ = [
+    "ResultView",
+    "best_text",
+    "fmt",
+    "objective_names_for",
+    "full_tables",
+    "summary_block",
+]
+
+
+def fmt(v: Any, m: MetricName | None = None) -> str:
+    """4 significant digits; yes/no for flags; "—" for missing or non-finite values."""
+    if v is None or isinstance(v, str):
+        return "—" if v is None else v
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if m is not None and m.kind == "flag":
+        return "yes" if v else "no"
+    if isinstance(v, int):
+        return str(v)
+    v = float(v)
+    if not math.isfinite(v):
+        return "—"
+    if v == 0:
+        return "0"
+    return f"{v:.4g}"
+
+
+def label(m: MetricName) -> str:
+    """``name (unit)``."""
+    return f"{m.label} ({m.unit})" if m.unit else m.label
+
+
+# ------------------------------------------------------------------ one result
+@dataclass
+class ResultView:
+    """A finished job as the CLI shows it (all values in the studies' units)."""
+
+    kind: str
+    objective_names: list[str]
+    objectives: dict[str, float | None]
+    metrics: dict[str, Any]
+    baselines: dict[str, dict[str, Any]]
+    table: list[dict[str, Any]] = field(default_factory=list)
+    optimizer: dict[str, Any] = field(default_factory=dict)
+    front_size: int | None = None
+    start: dict[str, Any] | None = None
+
+    @classmethod
+    def from_api(cls, kind: str, res: dict[str, Any], front_size: int | None = None) -> ResultView:
+        """From ``GET /jobs/{id}/result`` (and the total of ``/pareto``)."""
+        obj = res.get("objectives") or {}
+        names = list(res.get("objective_names") or obj.get("names") or [])
+        values = obj.get("values", {}) if isinstance(obj, dict) else {}
+        if isinstance(values, list):
+            values = dict(zip((display_objective(n, None)[0] for n in names), values,
+                              strict=False))  # fmt: skip
+        summary = res.get("summary") or {}
+        baselines = res.get("baselines") or []
+        if isinstance(baselines, list):
+            baselines = {b["name"]: b.get("metrics") or {} for b in baselines}
+        # a stored baseline is the decoded solution: {x, objectives, metrics, table, extra}
+        baselines = {
+            k: v["metrics"] if isinstance(v.get("metrics"), dict) else v
+            for k, v in baselines.items()
+        }
+        return cls(kind, names, dict(values), dict(res.get("metrics") or {}), dict(baselines),
+                   list(summary.get("table") or []), dict(summary.get("optimizer") or {}),
+                   front_size, summary.get("start"))  # fmt: skip
+
+    @classmethod
+    def from_run(cls, doc: dict[str, Any]) -> ResultView:
+        """From ``RunResult.to_dict()`` (``legopt run``)."""
+        best = doc["best"]
+        return cls(
+            doc["spec"]["problem"]["kind"],
+            list(doc["objective_names"]),
+            dict(best["objectives"]),
+            dict(best["metrics"]),
+            {k: v["metrics"] for k, v in doc.get("baselines", {}).items()},
+            list(best.get("table") or []),
+            dict(doc.get("optimizer") or {}),
+            len(doc.get("pareto") or []),
+            doc.get("start"),
+        )
+
+    # -------------------------------------------------------------- rows
+    def shown_objectives(self) -> list[tuple[str, MetricName, float | None]]:
+        """``(key, name, value)`` per objective, maximised ones positive, with their sense."""
+        out = []
+        for n in self.objective_names:
+            key, _ = display_objective(n, None)
+            m = metric_name(key, self.kind)
+            m = dataclasses.replace(m, sense="max" if n != key else "min", same_as=None)
+            value = self.objectives.get(key, self.objectives.get(n))
+            out.append((key, m, value))
+        return out
+
+    def shown_metrics(self) -> list[tuple[str, MetricName]]:
+        """Metric keys of the best and the baselines, without the objectives and repeats."""
+        skip = {k for k, _, _ in self.shown_objectives()}
+        keys: list[str] = []
+        for source in (self.metrics, *self.baselines.values()):
+            keys.extend(k for k in source if k not in keys)
+        out = []
+        for k in keys:
+            m = metric_name(k, self.kind)
+            if k in skip or m.same_as is not None:
+                continue
+            out.append((k, m))
+        return out
+
+    def value(self, key: str, baseline: str | None = None) -> Any:
+        """The best's (or a baseline's) value of ``key``: a metric, an objective, or the
+        metric that repeats that objective under another key."""
+        source = self.metrics if baseline is None else self.baselines.get(baseline, {})
+        if key in source:
+            return source[key]
+        if baseline is None and key in self.objectives:
+            return self.objectives[key]
+        for k, v in source.items():
+            if metric_name(k, self.kind).same_as == key:
+                return v
+        return None
+
+    @property
+    def multi_objective(self) -> bool:
+        return len(self.objective_names) > 1
+
+
+# ------------------------------------------------------------------ progress
+def objective_names_for(spec: dict[str, Any] | str | None) -> list[str] | None:
+    """The objective names of a job spec (or of a study kind's defaults), from the study itself
+    (cached; None when the spec cannot be built here, e.g. it names a stored robot)."""
+    if isinstance(spec, str):
+        return _kind_objectives(spec)
+    if not isinstance(spec, dict):
+        return None
+    try:
+        from legcore.runner import prepare
+
+        return list(prepare(spec).problem.objective_names)
+    except Exception:
+        kind = dotted(spec, "problem.kind")
+        return _kind_objectives(kind) if isinstance(kind, str) else None
+
+
+@cache
+def _kind_objectives(kind: str) -> list[str] | None:
+    try:
+        from legcore.runner import prepare
+
+        return list(prepare({"problem": {"kind": kind}}).problem.objective_names)
+    except Exception:
+        return None
+
+
+def best_text(names: list[str] | None, best: Any) -> str:
+    """The progress line's best-so-far: ``score 9.681`` (maximised shown positive)."""
+    if best is None:
+        return ""
+    values = best if isinstance(best, list) else [best]
+    if not names or len(names) != len(values):
+        return "best " + ", ".join(fmt(v) for v in values)
+    parts = []
+    for n, v in zip(names, values, strict=True):
+        key, shown = display_objective(n, v)
+        parts.append(f"{key} {fmt(shown)}")
+    return ", ".join(parts)
+
+
+# ------------------------------------------------------------------ the compact block
+def _change(start: Any, end: Any, m: MetricName | None = None) -> str:
+    """Relative change in % (empty for flags, missing values or a zero start)."""
+    if m is not None and (m.kind == "flag" or m.unit == "%"):
+        return ""
+    if not isinstance(start, int | float) or not isinstance(end, int | float):
+        return ""
+    if start == 0 or not math.isfinite(start) or not math.isfinite(end):
+        return ""
+    return f"{100.0 * (end - start) / abs(start):+.3g} %"
+
+
+def _pair(a: Any, b: Any, m: MetricName, single: bool = False) -> str:
+    """``a → b``, or ``b`` alone when ``single``."""
+    return fmt(b, m) if single else f"{fmt(a, m)} → {fmt(b, m)}"
+
+
+def summary_block(
+    view: ResultView, *, title: str, spec: dict[str, Any] | None = None
+) -> RenderableType:
+    """One study in a few lines: what was optimised, start → optimum of the objectives and
+    headline metrics, ours beside the paper's numbers (its symbol in parentheses)."""
+    study = STUDY_DISPLAY.get(view.kind)
+    paper = paper_entry(spec)
+    start = (paper.start if paper and paper.start else None) or (study.start if study else None)
+    if start not in view.baselines:
+        start = None
+    lines: list[RenderableType] = [Text.from_markup(title)]
+    what = study.task if study else "the decision variables"
+    head = f"  optimised: {what}"
+    if start:
+        head += f"; start = {baseline_name(start)}"
+    if view.multi_objective:
+        size = "?" if view.front_size is None else str(view.front_size)
+        head += f"; Pareto front of {size} points, optimum = its knee point"
+    lines.append(Text(head))
+    t = Table(box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, padding=(0, 1))
+    t.add_column("  quantity", no_wrap=True)
+    t.add_column("start → optimum" if start else "optimum", justify="right", no_wrap=True)
+    t.add_column("change", justify="right", no_wrap=True)
+    t.add_column(f"paper ({paper.source})" if paper else "paper", no_wrap=True)
+    prows = {r.metric: r for r in paper.rows} if paper else {}
+    notes: list[str] = []
+    rows: list[tuple[str, MetricName, Any]] = list(view.shown_objectives())
+    shown = {k for k, _, _ in rows}
+    extra = [k for k in (study.headline if study else ()) if k not in shown]
+    extra += [k for k in prows if k not in shown and k not in extra]
+    for k in extra:
+        v = view.value(k)
+        if v is not None:
+            rows.append((k, metric_name(k, view.kind), v))
+    for i, (key, m, v) in enumerate(rows):
+        name = label(m)
+        if i < len(view.objective_names):
+            name += " — maximised" if m.sense == "max" else " — minimised"
+        pr = prows.get(key)
+        symbol = (pr.paper if pr and pr.paper else "") or m.paper
+        if symbol:
+            name += f" (paper: {symbol})"
+        at_opt = bool(pr and pr.at_optimum)
+        s = None if at_opt or not start else view.value(key, start)
+        ours = _pair(s, v, m, single=at_opt or not start)
+        paper_txt = ""
+        if pr is not None:
+            paper_txt = (
+                "not printed" if pr.start is None and pr.optimum is None
+                else _pair(pr.start, pr.optimum, m, single=at_opt)
+            )  # fmt: skip
+            if pr.note:
+                notes.append(f"{m.label}: {pr.note}")
+            change = _change(pr.start, pr.optimum, m)
+            if change:
+                paper_txt += f"  ({change})"
+        if m.note:
+            notes.append(f"{m.label}: {m.note}")
+        t.add_row("  " + name, ours, _change(s, v, m), paper_txt)
+    lines.append(t)
+    earned = earned_line(view)
+    if earned:
+        lines.append(Text(earned))
+    if paper and paper.note:
+        notes.insert(0, paper.note)
+    lines.extend(Text(f"  note — {n}", style="dim") for n in notes)
+    return Group(*lines)
+
+
+def earned_line(view: ResultView) -> str:
+    """What the optimiser earned (single objective): its initial population's best → the
+    optimum, and the solution the encoding gives with no search, when there is one."""
+    st = view.start
+    if not st or len(st.get("objectives") or []) != 1:
+        return ""
+    row = st["objectives"][0]
+    key, opt = display_objective(row["objective"], row["optimum"])
+    m = metric_name(key, view.kind)
+    parts = []
+    if row.get("initial") is not None:
+        _, ini = display_objective(row["objective"], row["initial"])
+        infeasible = " (infeasible)" if (st.get("initial") or {}).get("cv", 0) > 0 else ""
+        parts.append(f"initial population's best {fmt(ini, m)}{infeasible} → {fmt(opt, m)}")
+    free = st.get("free")
+    if free and row.get("free") is not None:
+        _, fv = display_objective(row["objective"], row["free"])
+        infeasible = " (infeasible)" if free.get("cv", 0) > 0 else ""
+        same = abs(row["free"] - row["optimum"]) <= 1e-9 * max(1.0, abs(row["optimum"]))
+        tail = ": the optimum is that solution" if same and not infeasible else ""
+        parts.append(f"{free['what']}, with no search, gives {fmt(fv, m)}{infeasible}{tail}")
+    if not parts:
+        return ""
+    return f"  optimiser earned ({key}): " + "; ".join(parts)
+
+
+# ------------------------------------------------------------------ the full tables
+def full_tables(
+    view: ResultView, *, title: str, spec: dict[str, Any] | None = None
+) -> list[RenderableType]:
+    """Every metric of the optimum beside every baseline (and the paper's start and optimum
+    where it prints them), the per-joint table, the front size."""
+    t = Table(box=box.SIMPLE_HEAD)
+    t.add_column("quantity")
+    t.add_column("optimum", justify="right")
+    cols = list(view.baselines)
+    for b in cols:
+        t.add_column(baseline_name(b), justify="right", overflow="fold")
+    paper = paper_entry(spec)
+    prows = {r.metric: r for r in paper.rows if r.start is not None or r.optimum is not None} \
+        if paper else {}  # fmt: skip
+    if prows:
+        t.add_column("paper: start", justify="right")
+        t.add_column("paper: optimum", justify="right")
+
+    def cells(key: str, m: MetricName) -> list[str]:
+        out = [fmt(view.value(key, b), m) for b in cols]
+        if prows:
+            pr = prows.get(key)
+            out += ["", ""] if pr is None else [fmt(pr.start, m) if pr.start is not None
+                                                else "", fmt(pr.optimum, m)]  # fmt: skip
+        return out
+
+    for key, m, v in view.shown_objectives():
+        goal = "maximised" if m.sense == "max" else "minimised"
+        t.add_row(f"{label(m)} — {goal}", fmt(v, m), *cells(key, m))
+    for key, m in view.shown_metrics():
+        t.add_row(label(m), fmt(view.value(key), m), *cells(key, m))
+    opt = view.optimizer
+    blank = [""] * (len(cols) + (2 if prows else 0))
+    if opt:
+        t.add_row("generations / evaluations", f"{opt.get('n_gen')} / {opt.get('n_evals')}",
+                  *blank)  # fmt: skip
+        t.add_row("optimiser time (s)", fmt(opt.get("elapsed_s")), *blank)
+    out: list[RenderableType] = [Text.from_markup(title), t]
+    if paper and prows:
+        out.append(Text(f"paper: {paper.source}", style="dim"))
+    if view.table:
+        out.append(joint_table(view.table))
+    if view.multi_objective:
+        size = "?" if view.front_size is None else str(view.front_size)
+        names = ", ".join(label(m) for _, m, _ in view.shown_objectives())
+        out.append(Text(f"Pareto front: {size} points ({names}); the optimum is its knee point"))
+    return out
+
+
+def joint_table(rows: list[dict[str, Any]], title: str = "per joint") -> Table:
+    """Rows ``{metric, unit, values: [...], total}`` (seed 000 Table 2 style)."""
+    n = max((len(r.get("values") or []) for r in rows), default=0)
+    jt = Table(title=title, box=box.SIMPLE_HEAD)
+    jt.add_column("quantity (symbol)")
+    jt.add_column("unit")
+    for i in range(n):
+        jt.add_column(f"joint {i + 1}", justify="right")
+    jt.add_column("total", justify="right")
+    for row in rows:
+        vals = list(row.get("values") or [])
+        cells = [fmt(v) for v in vals] + [""] * (n - len(vals))
+        total = row.get("total")
+        jt.add_row(joint_row_name(str(row.get("metric", ""))), str(row.get("unit", "")), *cells,
+                   "" if total is None else fmt(total))  # fmt: skip
+    return jt

@@ -1,0 +1,369 @@
+"""Reads of the web dashboard: a page of jobs filtered, sorted and searched in SQL, their
+labels, hypervolumes and sweep members; the hypervolume reference point of a running job.
+
+The jobs page must stay fast at 10^5 jobs per key, so nothing here walks a key's jobs in
+Python. What a listing shows of a job's spec (study kind, robot, optimizer, name, seed, tags)
+lives in ``job_labels``, one row per job written once by :func:`sync_labels` (a spec never
+changes after submission), indexed by ``(owner, created_at)`` and ``(owner, kind,
+created_at)``; the jobs table has ``(owner, created_at)``. The default order (newest first)
+pages by keyset (``cursor``), every other order by offset over indexed columns.
+
+Like ``services.store.repository``: every function takes the ``Session`` first and never
+commits.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+from typing import Any, Literal
+
+from sqlalchemy import (
+    JSON,
+    ColumnElement,
+    Float,
+    and_,
+    cast,
+    func,
+    insert,
+    literal,
+    or_,
+    select,
+    type_coerce,
+)
+from sqlalchemy.orm import Session
+
+from services.store.records import JobRecord
+from services.store.tables import (
+    JOB_LABELS,
+    JOBS,
+    SWEEPS,
+    JobStatus,
+)
+
+#: Jobs created this long before the newest labelled one are checked again for a label (a
+#: transaction that committed late); PostgreSQL commits a job within ms of its created_at.
+LABEL_SLACK = timedelta(seconds=60)
+
+SortKey = Literal["created", "finished", "status", "kind", "robot", "optimizer", "progress", "best"]
+SORT_KEYS: tuple[str, ...] = (
+    "created", "finished", "status", "kind", "robot", "optimizer", "progress", "best",
+)  # fmt: skip
+
+
+# --------------------------------------------------------------------------- labels
+
+
+def label_values(base: Any, overrides: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The labels of a job whose spec is ``base`` with ``overrides`` applied: ``kind``,
+    ``robot`` (catalog or robot name; the study's default robot when none), ``optimizer``
+    (the study's default when none), ``name``, ``seed`` and ``tags`` (comma-joined)."""
+    from legcore.problems.registry import studies
+    from services.store.specs import spec_value
+
+    kind = str(spec_value(base, overrides, "problem.kind") or "")
+    study = studies().get(kind)
+    robot = spec_value(base, overrides, "robot")
+    if isinstance(robot, dict):
+        robot = robot.get("name") or robot.get("catalog") or "inline"
+    if robot is None:
+        robot = study.default_robot if study is not None else ""
+    optimizer = spec_value(base, overrides, "optimizer.kind")
+    if optimizer is None:
+        optimizer = study.default_optimizer.get("kind", "") if study is not None else ""
+    name = spec_value(base, overrides, "name")
+    seed = spec_value(base, overrides, "seed")
+    tags = spec_value(base, overrides, "tags")
+    tag_list = [str(t) for t in tags] if isinstance(tags, list) else []
+    return {
+        "kind": kind[:64],
+        "robot": str(robot)[:200],
+        "optimizer": str(optimizer)[:32],
+        "name": None if name is None else str(name)[:200],
+        "seed": int(seed) if isinstance(seed, int) else 0,
+        "tags": ",".join(tag_list),
+    }
+
+
+def _search_text(job_id: str, sweep_id: str | None, labels: Mapping[str, Any]) -> str:
+    parts = [labels.get("name") or "", labels["kind"], labels["robot"], labels["optimizer"],
+             labels["tags"], f"seed={labels['seed']}", job_id, sweep_id or ""]  # fmt: skip
+    return " ".join(p for p in parts if p).lower()
+
+
+def sync_labels(session: Session, owner_key_id: str, *, full: bool = False) -> int:
+    """Write the missing ``job_labels`` rows of a key's jobs; the number written.
+
+    Only jobs created since the newest labelled one (less ``LABEL_SLACK``) are looked at, so
+    the cost is that of the new jobs, not of all of them; ``full`` checks every job (after an
+    upgrade from a database without labels, the first call is full anyway)."""
+    newest = session.execute(
+        select(func.max(JOB_LABELS.c.created_at)).where(JOB_LABELS.c.owner_key_id == owner_key_id)
+    ).scalar_one_or_none()
+    stmt = (
+        select(JOBS.c.id, JOBS.c.sweep_id, JOBS.c.spec, JOBS.c.overrides, JOBS.c.created_at)
+        .outerjoin(JOB_LABELS, JOB_LABELS.c.job_id == JOBS.c.id)
+        .where(JOBS.c.owner_key_id == owner_key_id, JOB_LABELS.c.job_id.is_(None))
+    )
+    if newest is not None and not full:
+        stmt = stmt.where(JOBS.c.created_at >= newest - LABEL_SLACK)
+    missing = session.execute(stmt).all()
+    if not missing:
+        return 0
+    sweep_ids = {r.sweep_id for r in missing if r.spec is None and r.sweep_id is not None}
+    bases: dict[str, Any] = {}
+    if sweep_ids:
+        rows = session.execute(
+            select(SWEEPS.c.id, SWEEPS.c.base_spec).where(SWEEPS.c.id.in_(sweep_ids))
+        )
+        bases = {r[0]: r[1] for r in rows}
+    values = []
+    for r in missing:
+        base = r.spec if r.spec is not None else bases.get(r.sweep_id or "", {})
+        labels = label_values(base, None if r.spec is not None else r.overrides)
+        values.append(
+            {
+                "job_id": r.id,
+                "owner_key_id": owner_key_id,
+                "created_at": r.created_at,
+                **labels,
+                "search": _search_text(r.id, r.sweep_id, labels),
+            }
+        )
+    for start in range(0, len(values), 500):
+        session.execute(insert(JOB_LABELS), values[start : start + 500])
+    return len(values)
+
+
+def missing_labels(session: Session, owner_key_id: str) -> bool:
+    """True if :func:`sync_labels` has something to write (a cheap read first, so listings
+    take the write lock only when jobs were added)."""
+    newest = session.execute(
+        select(func.max(JOB_LABELS.c.created_at)).where(JOB_LABELS.c.owner_key_id == owner_key_id)
+    ).scalar_one_or_none()
+    stmt = (
+        select(JOBS.c.id)
+        .outerjoin(JOB_LABELS, JOB_LABELS.c.job_id == JOBS.c.id)
+        .where(JOBS.c.owner_key_id == owner_key_id, JOB_LABELS.c.job_id.is_(None))
+    )
+    if newest is not None:
+        stmt = stmt.where(JOBS.c.created_at >= newest - LABEL_SLACK)
+    return session.execute(stmt.limit(1)).first() is not None
+
+
+# --------------------------------------------------------------------------- the jobs page
+
+
+@dataclass(frozen=True)
+class JobFilter:
+    """What a jobs page shows: statuses, study kind, optimizer, robot (exact), sweep, tag and a
+    free-text ``search`` (matched, case-insensitively, against name, kind, robot, optimizer,
+    tags, seed, job and sweep ids)."""
+
+    status: tuple[JobStatus, ...] = ()
+    kind: str | None = None
+    optimizer: str | None = None
+    robot: str | None = None
+    sweep_id: str | None = None
+    tag: str | None = None
+    search: str | None = None
+
+
+@dataclass(frozen=True)
+class JobRow:
+    """One line of the jobs page: the job and its labels."""
+
+    job: JobRecord
+    name: str | None
+    kind: str
+    robot: str
+    optimizer: str
+    seed: int
+    tags: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class JobRowPage:
+    """A page of jobs: the rows, how many match, and the keyset cursor of the next page
+    (newest-first order only; None at the end or for other orders)."""
+
+    items: tuple[JobRow, ...]
+    total: int
+    limit: int
+    offset: int
+    next_cursor: str | None
+
+
+def _like(text: str) -> str:
+    """A LIKE pattern matching ``text`` anywhere (``%``, ``_`` and ``\\`` escaped)."""
+    escaped = text.replace("\\", "\\\\").replace("%", "\\%").replace("_", "\\_")
+    return f"%{escaped}%"
+
+
+def _label_filtered(f: JobFilter) -> bool:
+    """True when a filter needs the labels (then they drive the query), False when the jobs
+    table's own indexes answer it (status, sweep, or none)."""
+    return bool(f.kind or f.optimizer or f.robot or f.tag or f.search)
+
+
+def _conditions(owner_key_id: str, f: JobFilter, by_labels: bool) -> list[ColumnElement[bool]]:
+    owner = JOB_LABELS.c.owner_key_id if by_labels else JOBS.c.owner_key_id
+    c: list[ColumnElement[bool]] = [owner == owner_key_id]
+    if f.status:
+        c.append(JOBS.c.status.in_(list(f.status)))
+    if f.kind:
+        c.append(JOB_LABELS.c.kind == f.kind)
+    if f.optimizer:
+        c.append(JOB_LABELS.c.optimizer == f.optimizer)
+    if f.robot:
+        c.append(JOB_LABELS.c.robot == f.robot)
+    if f.sweep_id:
+        c.append(JOBS.c.sweep_id == f.sweep_id)
+    if f.tag:
+        tags = literal(",") + JOB_LABELS.c.tags + literal(",")
+        c.append(tags.like(_like(f",{f.tag},"), escape="\\"))
+    if f.search:
+        for word in f.search.split()[:8]:
+            c.append(JOB_LABELS.c.search.like(_like(word.lower()), escape="\\"))
+    return c
+
+
+def best_value() -> ColumnElement[Any]:
+    """The first objective of a job's best so far, as a number (NULL before generation 1)."""
+    return cast(type_coerce(JOBS.c.best_objective, JSON)[0].as_float(), Float)
+
+
+def _order(sort: str, descending: bool, by_labels: bool) -> list[ColumnElement[Any]]:
+    created = JOB_LABELS.c.created_at if by_labels else JOBS.c.created_at
+    ident = JOB_LABELS.c.job_id if by_labels else JOBS.c.id
+    column: ColumnElement[Any] = {
+        "created": created,
+        "finished": JOBS.c.finished_at,
+        "status": JOBS.c.status,
+        "kind": JOB_LABELS.c.kind,
+        "robot": JOB_LABELS.c.robot,
+        "optimizer": JOB_LABELS.c.optimizer,
+        "progress": JOBS.c.progress_generation,
+        "best": best_value(),
+    }[sort]
+    first = column.desc().nulls_last() if descending else column.asc().nulls_last()
+    if sort == "created":  # the index's own order (no NULLS LAST: created_at is never NULL)
+        first = column.desc() if descending else column.asc()
+    return [first, ident.desc() if descending else ident.asc()]
+
+
+def encode_cursor(created_at: datetime, job_id: str) -> str:
+    """The opaque keyset cursor after the job ``(created_at, job_id)``."""
+    raw = json.dumps([created_at.isoformat(), job_id]).encode()
+    return base64.urlsafe_b64encode(raw).decode().rstrip("=")
+
+
+def decode_cursor(cursor: str) -> tuple[datetime, str]:
+    """``(created_at, job_id)`` of a cursor; ValueError when it is not one of ours."""
+    try:
+        raw = base64.urlsafe_b64decode(cursor + "=" * (-len(cursor) % 4))
+        at, job_id = json.loads(raw)
+        return datetime.fromisoformat(at), str(job_id)
+    except (ValueError, TypeError, binascii.Error, json.JSONDecodeError):
+        raise ValueError("not a cursor of this listing: use next_cursor of a page") from None
+
+
+#: A listing counts its matches up to this many (then says "more than"): an exact count of
+#: 10^5 rows would cost more than the page itself.
+COUNT_CAP = 10_000
+
+
+def list_job_rows(
+    session: Session,
+    owner_key_id: str,
+    f: JobFilter = JobFilter(),  # noqa: B008 - frozen
+    *,
+    sort: str = "created",
+    descending: bool = True,
+    limit: int = 50,
+    offset: int = 0,
+    cursor: str | None = None,
+    count: bool = True,
+) -> JobRowPage:
+    """A page of a key's jobs (labels synced first by the caller: :func:`sync_labels`).
+
+    Filters on labels (kind, optimizer, robot, tag, search) walk the labels' indexes; status
+    and sweep filters alone walk the jobs table's ``(owner, status, created_at)`` and
+    ``(owner, created_at)`` indexes. ``cursor`` (newest-first order only) continues after the
+    last row of the previous page in O(limit) whatever the depth; ``offset`` works with every
+    order. ``total`` counts at most ``COUNT_CAP + 1`` matches (``count`` False: not at all, -1;
+    the export streams pages without it)."""
+    if sort not in SORT_KEYS:
+        raise ValueError(f"sort: expected one of {', '.join(SORT_KEYS)}, got {sort!r}")
+    by_labels = _label_filtered(f) or sort in ("kind", "robot", "optimizer")
+    conditions = _conditions(owner_key_id, f, by_labels)
+    joined = (
+        JOB_LABELS.join(JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
+        if by_labels
+        else JOBS.join(JOB_LABELS, JOB_LABELS.c.job_id == JOBS.c.id)
+    )
+    labels = [JOB_LABELS.c[c] for c in ("name", "kind", "robot", "optimizer", "seed", "tags")]
+    stmt = select(JOBS, *labels).select_from(joined).where(*conditions)
+    keyset = cursor is not None and sort == "created"
+    if keyset:
+        at, last = decode_cursor(cursor or "")
+        created = JOB_LABELS.c.created_at if by_labels else JOBS.c.created_at
+        ident = JOB_LABELS.c.job_id if by_labels else JOBS.c.id
+        older = or_(created < at, and_(created == at, ident < last))
+        newer = or_(created > at, and_(created == at, ident > last))
+        stmt = stmt.where(older if descending else newer)
+    total = -1
+    if count:
+        mixed = by_labels and bool(f.status or f.sweep_id)  # conditions on both tables
+        source = joined if mixed else JOB_LABELS if by_labels else JOBS
+        matches = select(literal(1)).select_from(source).where(*conditions)
+        capped = matches.limit(COUNT_CAP + 1).subquery()
+        total = int(session.execute(select(func.count()).select_from(capped)).scalar_one())
+    page = stmt.order_by(*_order(sort, descending, by_labels)).limit(limit)
+    if not keyset:
+        page = page.offset(offset)
+    rows = session.execute(page).mappings().all()
+    items = tuple(
+        JobRow(
+            job=_job_record(r),
+            name=r["name"],
+            kind=r["kind"],
+            robot=r["robot"],
+            optimizer=r["optimizer"],
+            seed=int(r["seed"]),
+            tags=tuple(t for t in (r["tags"] or "").split(",") if t),
+        )
+        for r in rows
+    )
+    next_cursor = None
+    if sort == "created" and len(items) == limit:
+        last_row = items[-1].job
+        next_cursor = encode_cursor(last_row.created_at, last_row.id)
+    return JobRowPage(items, total, limit, offset, next_cursor)
+
+
+def _job_record(row: Any) -> JobRecord:
+    from services.store.repository import to_record
+
+    return to_record(JobRecord, row)
+
+
+__all__ = [
+    "COUNT_CAP",
+    "LABEL_SLACK",
+    "SORT_KEYS",
+    "JobFilter",
+    "JobRow",
+    "JobRowPage",
+    "best_value",
+    "decode_cursor",
+    "encode_cursor",
+    "label_values",
+    "list_job_rows",
+    "missing_labels",
+    "sync_labels",
+]

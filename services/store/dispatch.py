@@ -1,0 +1,207 @@
+"""The dispatch outbox and elected service roles, in the database (the source of truth).
+
+A queued job carries ``dispatch_due_at``: the time its queue message is due to be (re)sent.
+It is set in the transaction that creates the job (``repository.create_jobs``) or requeues it
+(``lifecycle.requeue_expired``), so no crash between a commit and a send can lose a job.
+
+Whoever sends — the API right after its commit, or the elected dispatcher — first *claims the
+send* with one conditional UPDATE (``claim_sends``): it moves ``dispatch_due_at`` to the next
+re-send time and counts the message, so one message goes out per due time, never one per
+process per pass. The next re-send time backs off (``backoff_s[count]``): a job that waits
+behind busy workers gets a few duplicates in all, which are harmless (the claim decides).
+A message that was lost (killed worker, broker restart) is re-sent early when the broker holds
+fewer messages than there are queued jobs (``stale_before`` / ``stale_limit``).
+
+A *service lease* elects one holder of a named role (``try_lead``), so one dispatcher runs at
+a time among all workers and servers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from datetime import datetime, timedelta
+
+from sqlalchemy import ColumnElement, case, delete, func, literal, or_, select, update
+from sqlalchemy.orm import Session
+
+from services.store.events import add_events
+from services.store.lifecycle import insert_ignoring_duplicates
+from services.store.repository import now_utc, rowcount
+from services.store.tables import JOBS, SERVICE_LEASES, JobEventKind, JobStatus
+from services.store.types import UTCDateTime
+
+#: Seconds from a send to the next re-send of a still-queued job, by messages sent so far;
+#: the last value repeats. Multiplied by the lease length (``backoff_schedule``).
+BACKOFF_LEASES = (2.0, 4.0, 8.0, 16.0, 32.0)
+
+
+def backoff_schedule(lease_s: float) -> tuple[float, ...]:
+    """Re-send delays (s) for a lease of ``lease_s`` seconds: 2, 4, 8, 16, 32 leases."""
+    return tuple(k * lease_s for k in BACKOFF_LEASES)
+
+
+def and_queued(condition: ColumnElement[bool]) -> ColumnElement[bool]:
+    """``condition`` and the job is queued without a cancellation request."""
+    return (
+        (JOBS.c.status == JobStatus.QUEUED) & JOBS.c.cancel_requested.is_(False) & condition
+    )
+
+
+def _next_due(now: datetime, backoff_s: Sequence[float]) -> ColumnElement[datetime]:
+    """``now + backoff_s[dispatch_count]`` (the last delay repeats), as one SQL CASE."""
+    if not backoff_s:
+        raise ValueError("backoff_s needs at least one delay")
+    whens = [
+        (JOBS.c.dispatch_count == i, literal(now + timedelta(seconds=s), UTCDateTime()))
+        for i, s in enumerate(backoff_s[:-1])
+    ]
+    last = literal(now + timedelta(seconds=backoff_s[-1]), UTCDateTime())
+    return case(*whens, else_=last) if whens else last
+
+
+def claim_sends(
+    session: Session,
+    *,
+    backoff_s: Sequence[float],
+    job_ids: Sequence[str] | None = None,
+    stale_before: datetime | None = None,
+    stale_limit: int = 0,
+    limit: int = 1000,
+    now: datetime | None = None,
+) -> list[str]:
+    """Claim the sending of due messages; the ids whose message the caller must send now.
+
+    Due: queued, not cancel-requested, ``dispatch_due_at <= now`` (restricted to ``job_ids``
+    when given). Also, up to ``stale_limit`` queued jobs last sent before ``stale_before``
+    (the broker holds fewer messages than queued jobs: theirs were lost), oldest send first.
+    Each claimed job's ``dispatch_due_at`` moves to ``now + backoff_s[dispatch_count]`` and its
+    count grows by one, in one conditional UPDATE, so a concurrent sender cannot claim it too.
+    """
+    now = now_utc(now)
+    ids: list[str] = []
+    due = select(JOBS.c.id).where(and_queued(JOBS.c.dispatch_due_at <= now))
+    if job_ids is not None:
+        if not job_ids:
+            return []
+        due = due.where(JOBS.c.id.in_(list(job_ids)))
+    ids.extend(session.execute(due.order_by(JOBS.c.dispatch_due_at).limit(limit)).scalars())
+    if stale_before is not None and stale_limit > 0 and job_ids is None:
+        stale = (
+            select(JOBS.c.id)
+            .where(
+                and_queued(JOBS.c.last_dispatch_at < stale_before),
+                JOBS.c.dispatch_due_at > now,
+            )
+            .order_by(JOBS.c.last_dispatch_at)
+            .limit(stale_limit)
+        )
+        ids.extend(session.execute(stale).scalars())
+    if not ids:
+        return []
+    claimable = JOBS.c.dispatch_due_at <= now
+    if stale_before is not None:
+        claimable = or_(claimable, JOBS.c.last_dispatch_at < stale_before)
+    stmt = (
+        update(JOBS)
+        .where(JOBS.c.id.in_(ids), and_queued(claimable))
+        .values(
+            dispatch_due_at=_next_due(now, backoff_s),
+            last_dispatch_at=now,
+            dispatch_count=JOBS.c.dispatch_count + 1,
+        )
+        .returning(JOBS.c.id)
+    )
+    claimed = set(session.execute(stmt).scalars())
+    return [i for i in ids if i in claimed]
+
+
+def record_sent(
+    session: Session, job_ids: Sequence[str], *, actor: str, now: datetime | None = None
+) -> None:
+    """Record a ``dispatched`` event for each job whose message was sent."""
+    add_events(session, JobEventKind.DISPATCHED, job_ids, actor=actor, now=now)
+
+
+def release_sends(
+    session: Session, job_ids: Sequence[str], *, retry_at: datetime
+) -> None:
+    """Give back claimed sends that failed (broker down): due again at ``retry_at``."""
+    if not job_ids:
+        return
+    session.execute(
+        update(JOBS)
+        .where(JOBS.c.id.in_(list(job_ids)), JOBS.c.status == JobStatus.QUEUED)
+        .values(
+            dispatch_due_at=retry_at,
+            dispatch_count=case(
+                (JOBS.c.dispatch_count > 0, JOBS.c.dispatch_count - 1), else_=0
+            ),
+        )
+    )
+
+
+def queued_sent_count(session: Session) -> int:
+    """Queued jobs (not cancel-requested) whose message was sent at least once."""
+    stmt = select(func.count()).select_from(JOBS).where(and_queued(JOBS.c.dispatch_count > 0))
+    return int(session.execute(stmt).scalar_one())
+
+
+# --------------------------------------------------------------------------- service leases
+
+
+def try_lead(
+    session: Session, name: str, owner: str, ttl_s: float, *, now: datetime | None = None
+) -> bool:
+    """Hold the role ``name`` for ``ttl_s`` seconds more; True if ``owner`` holds it now.
+
+    One conditional UPDATE takes the lease when ``owner`` already holds it or it expired; the
+    first caller ever INSERTs it. A paused holder finds, when it resumes, that it lost it.
+    """
+    if ttl_s <= 0:
+        raise ValueError(f"ttl_s must be > 0, got {ttl_s}")
+    now = now_utc(now)
+    until = now + timedelta(seconds=ttl_s)
+    stmt = (
+        update(SERVICE_LEASES)
+        .where(
+            SERVICE_LEASES.c.name == name,
+            or_(SERVICE_LEASES.c.owner == owner, SERVICE_LEASES.c.expires_at < now),
+        )
+        .values(owner=owner, expires_at=until)
+    )
+    if rowcount(session.execute(stmt)) > 0:
+        return True
+    return insert_ignoring_duplicates(
+        session, SERVICE_LEASES, {"name": name, "owner": owner, "expires_at": until}, ("name",)
+    )
+
+
+def release_lead(session: Session, name: str, owner: str) -> None:
+    """Give up the role ``name`` if ``owner`` holds it (a clean shutdown)."""
+    session.execute(
+        delete(SERVICE_LEASES).where(SERVICE_LEASES.c.name == name, SERVICE_LEASES.c.owner == owner)
+    )
+
+
+def lead_holder(session: Session, name: str) -> tuple[str, datetime] | None:
+    """``(owner, expires_at)`` of the role ``name``, or None."""
+    row = session.execute(
+        select(SERVICE_LEASES.c.owner, SERVICE_LEASES.c.expires_at).where(
+            SERVICE_LEASES.c.name == name
+        )
+    ).first()
+    return None if row is None else (str(row[0]), row[1])
+
+
+__all__ = [
+    "BACKOFF_LEASES",
+    "and_queued",
+    "backoff_schedule",
+    "claim_sends",
+    "lead_holder",
+    "queued_sent_count",
+    "record_sent",
+    "release_lead",
+    "release_sends",
+    "try_lead",
+]

@@ -1,0 +1,122 @@
+"""Reads and writes of a job's outputs that the dashboard and the worker add to the store: the
+final hypervolume of jobs, points of a front, fronts of several jobs, artifacts made after a
+job finished (a front point's recording), and the reference point of a job's hypervolumes.
+
+Like ``services.store.repository``: every function takes the ``Session`` first and never
+commits.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+from sqlalchemy import and_, func, select, update
+from sqlalchemy.orm import Session
+
+from services.store.records import ParetoPointRecord
+from services.store.repository import fetch_all, fetch_one, now_utc
+from services.store.tables import ARTIFACTS, GENERATIONS, JOBS, PARETO_POINTS, JobStatus
+
+
+def final_hypervolumes(session: Session, job_ids: Sequence[str]) -> dict[str, float]:
+    """``{job_id: hypervolume of its last generation that has one}`` (jobs without one are
+    absent). Each is measured against its job's own reference point."""
+    ids = list(job_ids)
+    if not ids:
+        return {}
+    last = (
+        select(GENERATIONS.c.job_id, func.max(GENERATIONS.c.generation).label("g"))
+        .where(GENERATIONS.c.job_id.in_(ids), GENERATIONS.c.hypervolume.is_not(None))
+        .group_by(GENERATIONS.c.job_id)
+        .subquery()
+    )
+    stmt = select(GENERATIONS.c.job_id, GENERATIONS.c.hypervolume).join(
+        last, and_(GENERATIONS.c.job_id == last.c.job_id, GENERATIONS.c.generation == last.c.g)
+    )
+    return {r[0]: float(r[1]) for r in session.execute(stmt)}
+
+
+def get_pareto_point(session: Session, job_id: str, index: int) -> ParetoPointRecord | None:
+    """Point ``index`` of a job's final front, or None."""
+    stmt = select(PARETO_POINTS).where(
+        PARETO_POINTS.c.job_id == job_id, PARETO_POINTS.c.index == index
+    )
+    return fetch_one(session, ParetoPointRecord, stmt)
+
+
+def fronts_of(session: Session, job_ids: Iterable[str]) -> dict[str, list[ParetoPointRecord]]:
+    """The final fronts of several jobs in one query, by index."""
+    ids = list(job_ids)
+    out: dict[str, list[ParetoPointRecord]] = {i: [] for i in ids}
+    if not ids:
+        return out
+    stmt = (
+        select(PARETO_POINTS)
+        .where(PARETO_POINTS.c.job_id.in_(ids))
+        .order_by(PARETO_POINTS.c.job_id, PARETO_POINTS.c.index)
+    )
+    for p in fetch_all(session, ParetoPointRecord, stmt):
+        out[p.job_id].append(p)
+    return out
+
+
+def add_artifact(
+    session: Session, job_id: str, kind: str, relative_path: str, sha256: str, size_bytes: int
+) -> bool:
+    """Record a file made after the job finished (a point's recording); False if an artifact
+    of this kind already exists (made by a concurrent request: keep the first)."""
+    from services.store.lifecycle import insert_ignoring_duplicates
+
+    return insert_ignoring_duplicates(
+        session,
+        ARTIFACTS,
+        {
+            "job_id": job_id,
+            "kind": kind,
+            "relative_path": relative_path,
+            "sha256": sha256,
+            "size_bytes": int(size_bytes),
+            "created_at": now_utc(),
+        },
+        ["job_id", "kind"],
+    )
+
+
+# --------------------------------------------------------------------------- hypervolume
+
+
+def get_hypervolume_ref(session: Session, job_id: str) -> list[float] | None:
+    """The reference point of a job's per-generation hypervolumes, or None (not set yet, or a
+    single-objective job)."""
+    value = session.execute(
+        select(JOBS.c.hypervolume_ref).where(JOBS.c.id == job_id)
+    ).scalar_one_or_none()
+    return None if value is None else [float(v) for v in value]
+
+
+def set_hypervolume_ref(
+    session: Session, job_id: str, worker_id: str, ref: Sequence[float]
+) -> bool:
+    """Record a running job's hypervolume reference point once (only its lease holder, only
+    while none is set); True if written."""
+    stmt = (
+        update(JOBS)
+        .where(
+            JOBS.c.id == job_id,
+            JOBS.c.status == JobStatus.RUNNING,
+            JOBS.c.lease_owner == worker_id,
+            JOBS.c.hypervolume_ref.is_(None),
+        )
+        .values(hypervolume_ref=[float(v) for v in ref])
+    )
+    return int(session.execute(stmt).rowcount) > 0  # type: ignore[attr-defined]
+
+
+__all__ = [
+    "add_artifact",
+    "final_hypervolumes",
+    "fronts_of",
+    "get_hypervolume_ref",
+    "get_pareto_point",
+    "set_hypervolume_ref",
+]

@@ -1,0 +1,193 @@
+// One job: status and progress (polled while it runs), convergence (best per objective and
+// hypervolume per generation), the Pareto front (click a point, a table row or a baseline to
+// see that solution's joint signals and its Rerun recording), metrics, spec, downloads.
+import { api, download } from "../api.js";
+import { convergencePlot, frontPlot, jointPlot, purge } from "../plots.js";
+import { Viewer } from "../viewer.js";
+import { badge, bar, best, clear, fill, h, num, shortId, TERMINAL, when } from "../ui.js";
+import { rerun } from "./jobs.js";
+
+const POLL_MS = 1500;
+
+export async function render(main, jobId) {
+  let alive = true;
+  let timer = null;
+  const head = h("div");
+  const progress = h("div.card");
+  const conv = h("div.plot.small#convergence");
+  const frontEl = h("div.plot#front-plot");
+  const frontTable = h("table#front-table");
+  const motionCard = h("div.card#motion");
+  const viewer = new Viewer();
+  const metrics = h("div.card#metrics");
+  const spec = h("div.card");
+  const plots = [conv, frontEl];
+  let front = null;
+  let selected = null;
+  let lastGen = null;
+  let generations = [];
+  let signal = "q";
+
+  main.append(head, progress,
+    h("div.row",
+      h("div.card.grow", h("h2", "Convergence"), conv),
+      h("div.card.grow", h("h2", "Pareto front"), h("p.muted", "Click a point, a row or a baseline to see its motion."), frontEl)),
+    h("div.card", h("div.toolbar", h("h2", "Front points"), h("span.spacer"),
+      ...["csv", "parquet", "json"].map((f) => h("button.secondary", { dataset: { export: `front-${f}` },
+        on: { click: () => download(`/jobs/${jobId}/front/export?format=${f}`, `front.${f}`) } }, `front ${f.toUpperCase()}`)),
+      ...["csv", "parquet"].map((f) => h("button.secondary", { dataset: { export: `history-${f}` },
+        on: { click: () => download(`/jobs/${jobId}/history/export?format=${f}`, `history.${f}`) } }, `history ${f.toUpperCase()}`))),
+      h("div.scroll", frontTable)),
+    h("div.row", h("div.grow", motionCard), h("div.card.grow", h("h2", "Rerun recording"), viewer.el)),
+    metrics, spec);
+
+  async function refresh() {
+    clearTimeout(timer);
+    const job = await api(`/jobs/${jobId}`);
+    if (!alive) return;
+    drawHead(job);
+    drawProgress(job);
+    const page = await api(`/jobs/${jobId}/generations${lastGen === null ? "" : `?after=${lastGen}`}`);
+    generations = generations.concat(page.items);
+    if (page.items.length) lastGen = page.next_after;
+    if (generations.length) convergencePlot(conv, generations, front ? front.objectives : objectivesOf(generations));
+    if (TERMINAL.has(job.status)) {
+      if (job.status === "succeeded" && !front) await loadResult(job);
+    } else {
+      timer = setTimeout(() => refresh().catch(() => {}), POLL_MS);
+    }
+  }
+
+  function objectivesOf(gens) {
+    const b = gens[0] && gens[0].best;
+    const m = Array.isArray(b) ? b.length : 1;
+    return Array.from({ length: m }, (_, j) => ({ name: `f${j + 1}`, label: `f${j + 1}`, unit: "", axis: `f${j + 1}` }));
+  }
+
+  function drawHead(job) {
+    fill(head, h("div.toolbar",
+      h("h1", job.name || `Job ${shortId(job.id)}`), badge(job.status),
+      job.sweep_id ? h("a", { href: `#/sweep/${job.sweep_id}` }, `sweep ${shortId(job.sweep_id)}`) : null,
+      h("span.spacer"),
+      !TERMINAL.has(job.status) ? h("button.danger", { on: { click: async () => {
+        await api(`/jobs/${job.id}/cancel`, { method: "POST" }); refresh(); } } }, "Cancel") : null,
+      h("button.secondary", { on: { click: async () => { location.hash = `#/job/${(await rerun(job.id)).id}`; } } }, "Re-run (new seed)"),
+      h("button.secondary", { dataset: { export: "spec" }, on: { click: () => download(`/jobs/${job.id}/spec.yaml`, "spec.yaml") } }, "Spec YAML"),
+      job.status === "succeeded" ? h("button.secondary", { on: { click: () => download(`/jobs/${job.id}/recording`, "job.rrd") } }, "Recording .rrd") : null));
+  }
+
+  function drawProgress(job) {
+    fill(progress, 
+      h("dl.kv",
+        h("dt", "study"), h("dd", job.kind || "—"),
+        h("dt", "progress"), h("dd", bar(job.progress, `generation ${job.generation} of ${job.total_generations || "?"}`)),
+        h("dt", "best so far"), h("dd", best(job.best_objective)),
+        h("dt", "attempts"), h("dd", String(job.attempts)),
+        h("dt", "created / started / finished"), h("dd", `${when(job.created_at)} · ${when(job.started_at)} · ${when(job.finished_at)}`),
+        h("dt", "id"), h("dd.mono", job.id)),
+      job.error ? h("p.error", job.error) : null,
+      job.warnings.length ? h("ul.warn-list", job.warnings.map((w) => h("li", w))) : null);
+    fill(spec, h("h2", "Spec"), h("pre.spec", JSON.stringify(job.spec, null, 2)));
+  }
+
+  async function loadResult(job) {
+    const [f, result] = await Promise.all([api(`/jobs/${job.id}/front`), api(`/jobs/${job.id}/result`)]);
+    if (!alive) return;
+    front = f;
+    if (generations.length) convergencePlot(conv, generations, front.objectives);
+    frontPlot(frontEl, front, pick);
+    drawFrontTable();
+    drawMetrics(result);
+    const first = front.best_index ?? (front.points[0] && front.points[0].index);
+    if (first !== undefined && first !== null) pick({ kind: "point", index: first });
+  }
+
+  function drawFrontTable() {
+    clear(frontTable);
+    const o = front.objectives;
+    const nx = Math.min(front.variables.length, 12);
+    frontTable.append(h("thead", h("tr", h("th", "#"), o.map((q) => h("th.num", q.axis)),
+      front.variables.slice(0, nx).map((v) => h("th.num", v.label)))));
+    const body = h("tbody");
+    for (const p of front.points) {
+      const tr = h("tr.clickable", { dataset: { point: p.index } }, h("td", String(p.index)),
+        p.objectives.map((v) => h("td.num", num(v))), p.x.slice(0, nx).map((v) => h("td.num", num(v))));
+      tr.addEventListener("click", () => pick({ kind: "point", index: p.index }));
+      body.append(tr);
+    }
+    for (const b of front.baselines) {
+      const tr = h("tr.clickable", { dataset: { baseline: b.name } }, h("td", h("em", `baseline ${b.name}`)),
+        b.objectives.map((v) => h("td.num", num(v))), front.variables.slice(0, nx).map(() => h("td")));
+      tr.addEventListener("click", () => pick({ kind: "baseline", name: b.name }));
+      body.append(tr);
+    }
+    frontTable.append(body);
+  }
+
+  function drawMetrics(result) {
+    const labels = Object.fromEntries(front.metrics.map((q) => [q.name, q]));
+    const rows = Object.entries(result.metrics || {}).map(([k, v]) => {
+      const q = labels[k] || { label: k, unit: "" };
+      return h("tr", h("td", q.label), h("td.mono.muted", k), h("td.num", num(v)), h("td", q.unit),
+        front.baselines.map((b) => h("td.num", num(b.metrics[k]))));
+    });
+    fill(metrics, earnedBlock(result), h("h2", "Metrics of the reported optimum"),
+      h("table#metrics-table", h("thead", h("tr", h("th", "metric"), h("th", "name"), h("th.num", "optimum"), h("th", "unit"),
+        front.baselines.map((b) => h("th.num", `baseline ${b.name}`)))), h("tbody", rows)));
+  }
+
+  // What the optimiser earned: its initial population's best and the solution the encoding
+  // gives with no search (summary.start, legcore/earned.py) beside the optimum.
+  function earnedBlock(result) {
+    const st = (result.summary || {}).start;
+    if (!st || !st.objectives) return null;
+    const rows = st.objectives.map((r) => h("tr", h("td.mono", r.objective), h("td.num", num(r.initial)),
+      h("td.num", num(r.free)), h("td.num", num(r.optimum)), h("td.num", r.earned_pct == null ? "" : `${num(r.earned_pct)} %`)));
+    return h("section#earned", h("h2", "What the optimiser earned"), h("p", st.verdict),
+      h("table", h("thead", h("tr", h("th", "objective (minimised)"), h("th.num", "initial population's best"),
+        h("th.num", st.free ? `${st.free.what} (no search)` : "no-search solution"), h("th.num", "optimum"),
+        h("th.num", "earned over the initial best"))), h("tbody", rows)));
+  }
+
+  async function pick(sel) {
+    selected = sel;
+    for (const tr of frontTable.querySelectorAll("tr.selected")) tr.classList.remove("selected");
+    const row = sel.kind === "point" ? frontTable.querySelector(`tr[data-point="${sel.index}"]`)
+      : frontTable.querySelector(`tr[data-baseline="${CSS.escape(sel.name)}"]`);
+    if (row) { row.classList.add("selected"); row.scrollIntoView({ block: "nearest" }); }
+    frontPlot(frontEl, front, pick, sel);
+    const title = sel.kind === "point" ? `front point ${sel.index}` : `baseline ${sel.name}`;
+    fill(motionCard, h("h2", `Motion of ${title}`), h("p.muted", "decoding…"));
+    const q = sel.kind === "point" ? `point=${sel.index}` : `baseline=${encodeURIComponent(sel.name)}`;
+    try {
+      const motion = await api(`/jobs/${jobId}/motion?${q}`);
+      if (selected !== sel || !alive) return;
+      drawMotion(motion, title);
+      if (sel.kind === "point") viewer.open(`/jobs/${jobId}/pareto/${sel.index}/recording`, `${title} of ${shortId(jobId)}`);
+      else viewer.open(`/jobs/${jobId}/recording`, `job ${shortId(jobId)} (baselines inside)`);
+    } catch (err) {
+      fill(motionCard, h("h2", `Motion of ${title}`), h("p.error", err.message));
+    }
+  }
+
+  function drawMotion(motion, title) {
+    const plot = h("div.plot#joint-plot");
+    plots.push(plot);
+    const tabs = h("div.tabs", motion.signals.map((s) => h(`button${s.name === signal ? ".on" : ""}`, {
+      dataset: { signal: s.name }, on: { click: () => { signal = s.name; drawMotion(motion, title); } } }, s.name)));
+    const obj = Object.entries(motion.objectives).map(([k, v]) => `${k} = ${num(v)}`).join(" · ");
+    const labels = Object.fromEntries((front ? front.metrics : []).map((q) => [q.name, q]));
+    const metricRows = Object.entries(motion.metrics).map(([k, v]) => {
+      const q = labels[k] || { label: k, unit: "" };
+      return h("tr", h("td", q.label), h("td.num", num(v)), h("td", q.unit));
+    });
+    fill(motionCard, h("h2", `Motion of ${title}`), h("p", obj), tabs, plot,
+      motion.t.length ? h("p.muted", `${motion.joint_names.length} joints, ${motion.source_samples} samples (${motion.t.length} plotted)`) : null,
+      metricRows.length ? h("details", h("summary", `its metrics (${metricRows.length})`),
+        h("table#point-metrics", h("tbody", metricRows))) : null);
+    jointPlot(plot, motion, signal);
+  }
+
+  await refresh();
+  return () => { alive = false; clearTimeout(timer); plots.forEach(purge); };
+}

@@ -1,0 +1,170 @@
+// The jobs page: filter, sort, search and page your jobs (all done by the API in SQL), watch
+// their progress (short polling while any is queued or running), cancel, re-run, submit a new
+// job, download the list.
+import { api, download, idempotencyKey, query } from "../api.js";
+import { badge, bar, best, clear, h, shortId, TERMINAL, when } from "../ui.js";
+
+const POLL_MS = 2000;
+const COLUMNS = [
+  ["name", "job", null], ["kind", "study", "kind"], ["robot", "robot", "robot"],
+  ["optimizer", "optimizer", "optimizer"], ["status", "status", "status"],
+  ["progress", "progress", "progress"], ["best", "best so far", "best"],
+  ["created", "created", "created"], ["finished", "finished", "finished"], ["tags", "tags", null],
+  ["actions", "", null],
+];
+
+function stateFromHash(hash) {
+  const q = new URLSearchParams((hash.split("?")[1]) || "");
+  return { q: q.get("q") || "", kind: q.get("kind") || "", optimizer: q.get("optimizer") || "",
+    robot: q.get("robot") || "", status: q.getAll("status"), sweep_id: q.get("sweep_id") || "",
+    sort: q.get("sort") || "created", order: q.get("order") || "desc", limit: 50 };
+}
+
+export async function render(main, _param, hash) {
+  const st = { ...stateFromHash(hash), offset: 0, cursors: [null], page: 0 };
+  const options = await api("/dashboard/options");
+  let timer = null;
+  let alive = true;
+
+  const search = h("input", { type: "search", placeholder: "search name, robot, seed=3, id…", value: st.q, size: 28 });
+  const kind = h("select", h("option", { value: "" }, "all studies"),
+    options.kinds.map((k) => h("option", { value: k.value, selected: k.value === st.kind }, k.value)));
+  const optimizer = h("select", h("option", { value: "" }, "all optimizers"),
+    options.optimizers.map((o) => h("option", { value: o.value, selected: o.value === st.optimizer }, o.label)));
+  const robot = h("input", { placeholder: "robot", value: st.robot, size: 14 });
+  const statusBoxes = options.statuses.map((s) => h("label", h("input", { type: "checkbox", value: s,
+    checked: st.status.includes(s) }), " ", s));
+  const info = h("span.muted");
+  const table = h("table#jobs-table");
+  const pager = h("div.pager");
+
+  const filters = () => ({ q: search.value.trim(), kind: kind.value, optimizer: optimizer.value,
+    robot: robot.value.trim(), status: statusBoxes.map((l) => l.firstChild).filter((c) => c.checked).map((c) => c.value),
+    sweep_id: st.sweep_id });
+
+  function restart() { st.offset = 0; st.cursors = [null]; st.page = 0; load(); }
+  for (const el of [kind, optimizer, ...statusBoxes.map((l) => l.firstChild)]) el.addEventListener("change", restart);
+  let debounce = null;
+  for (const el of [search, robot]) el.addEventListener("input", () => { clearTimeout(debounce); debounce = setTimeout(restart, 300); });
+
+  const newJob = newJobForm(options, () => restart());
+  main.append(
+    h("div.toolbar", h("h1", "Jobs"), h("span.spacer"),
+      h("button.secondary", { on: { click: () => { newJob.hidden = !newJob.hidden; } } }, "New job"),
+      ...["csv", "parquet", "json"].map((f) => h("button.secondary", { dataset: { export: f },
+        on: { click: () => download(`/export/jobs${query({ ...filters(), format: f })}`, `jobs.${f}`) } }, f.toUpperCase()))),
+    newJob,
+    h("div.card",
+      h("div.toolbar", search, kind, optimizer, robot, ...statusBoxes,
+        st.sweep_id ? h("span.tag", `sweep ${shortId(st.sweep_id)}`) : null, h("span.spacer"), info),
+      h("div.scroll", { style: "max-height:none" }, table), pager));
+
+  async function load() {
+    clearTimeout(timer);
+    const f = filters();
+    const keyset = st.sort === "created";
+    const params = { ...f, sort: st.sort, order: st.order, limit: st.limit,
+      cursor: keyset ? st.cursors[st.page] : null, offset: keyset ? 0 : st.offset };
+    let page;
+    try { page = await api(`/dashboard/jobs${query(params)}`); } catch (err) {
+      info.textContent = err.message; return;
+    }
+    if (!alive) return;
+    const start = keyset ? st.page * st.limit : st.offset;
+    const total = page.total > 10000 ? "more than 10,000" : page.total.toLocaleString();
+    info.textContent = page.total ? `${start + 1}–${start + page.items.length} of ${total}` : "no jobs";
+    drawTable(page.items);
+    drawPager(page, start);
+    if (page.items.some((j) => !TERMINAL.has(j.status))) timer = setTimeout(load, POLL_MS);
+  }
+
+  function drawTable(items) {
+    clear(table);
+    table.append(h("thead", h("tr", COLUMNS.map(([key, label, sortKey]) => {
+      const th = h(`th${sortKey ? ".sortable" : ""}${["progress", "best"].includes(key) ? ".num" : ""}`, label);
+      if (sortKey) {
+        if (st.sort === sortKey) th.classList.add("sorted", st.order);
+        th.addEventListener("click", () => {
+          st.order = st.sort === sortKey && st.order === "desc" ? "asc" : "desc";
+          st.sort = sortKey;
+          restart();
+        });
+      }
+      return th;
+    }))));
+    const body = h("tbody");
+    for (const j of items) {
+      const tr = h("tr.clickable", { dataset: { job: j.id, status: j.status } },
+        h("td", h("a", { href: `#/job/${j.id}` }, j.name || shortId(j.id)), j.name ? h("div.muted.mono", shortId(j.id)) : null),
+        h("td", j.kind), h("td", j.robot), h("td", j.optimizer), h("td", badge(j.status)),
+        h("td", bar(j.progress, `${j.generation}/${j.total_generations || "?"}`)),
+        h("td.num", best(j.best_objective)), h("td", when(j.created_at)), h("td", when(j.finished_at)),
+        h("td", j.tags.map((t) => h("span.tag", t)), j.sweep_id ? h("a.tag", { href: `#/sweep/${j.sweep_id}` }, "sweep") : null),
+        h("td", actions(j)));
+      tr.addEventListener("click", (ev) => { if (!ev.target.closest("a,button")) location.hash = `#/job/${j.id}`; });
+      body.append(tr);
+    }
+    table.append(body);
+  }
+
+  function actions(j) {
+    const out = [];
+    if (!TERMINAL.has(j.status)) {
+      out.push(h("button.danger", { title: "Cancel this job", on: { click: async () => {
+        await api(`/jobs/${j.id}/cancel`, { method: "POST" }); load(); } } }, "Cancel"));
+    }
+    out.push(h("button.secondary", { title: "Submit the same spec with a new seed", on: { click: async (ev) => {
+      ev.target.disabled = true;
+      const created = await rerun(j.id);
+      location.hash = `#/job/${created.id}`;
+    } } }, "Re-run"));
+    return out;
+  }
+
+  function drawPager(page, start) {
+    clear(pager);
+    const keyset = st.sort === "created";
+    const prev = h("button.secondary", { disabled: start === 0, on: { click: () => {
+      if (keyset) st.page -= 1; else st.offset = Math.max(0, st.offset - st.limit);
+      load(); } } }, "← newer");
+    const more = keyset ? page.next_cursor !== null : start + page.items.length < page.total;
+    const next = h("button.secondary", { disabled: !more, on: { click: () => {
+      if (keyset) { st.cursors[st.page + 1] = page.next_cursor; st.page += 1; } else st.offset += st.limit;
+      load(); } } }, "older →");
+    pager.append(prev, next, h("span.muted", keyset ? `page ${st.page + 1}` : `offset ${st.offset}`));
+  }
+
+  await load();
+  return () => { alive = false; clearTimeout(timer); };
+}
+
+/** Submit a job's spec again with a new seed; the new job. */
+export async function rerun(jobId) {
+  const job = await api(`/jobs/${jobId}`);
+  const spec = { ...job.spec, seed: Math.floor(Math.random() * 2 ** 31) };
+  return api("/jobs", { method: "POST", body: spec, headers: { "Idempotency-Key": idempotencyKey() } });
+}
+
+function newJobForm(options, onDone) {
+  const kind = h("select#new-kind", options.kinds.map((k) => h("option", { value: k.value }, `${k.value} — ${k.label}`)));
+  const generations = h("input#new-generations", { type: "number", min: 1, value: 10, size: 6 });
+  const text = h("textarea#new-spec", { rows: 6, cols: 80, placeholder: '{"problem": {"kind": "path_tracking"}, "budget": {"generations": 20}}' });
+  const msg = h("p.muted");
+  const form = h("div.card#new-job", { hidden: true },
+    h("h2", "New job"),
+    h("div.toolbar", "Study (the seed paper's defaults)", kind, "generations", generations,
+      h("button#submit-example", { on: { click: () => submit({ problem: { kind: kind.value }, budget: { generations: Number(generations.value) } }) } }, "Submit")),
+    h("p.muted", "…or paste a whole job spec (JSON, the document of `legopt run`):"), text,
+    h("div.toolbar", h("button.secondary", { on: { click: () => {
+      try { submit(JSON.parse(text.value)); } catch (err) { msg.textContent = `not JSON: ${err.message}`; }
+    } } }, "Submit spec")), msg);
+  async function submit(spec) {
+    msg.textContent = "submitting…";
+    try {
+      const job = await api("/jobs", { method: "POST", body: spec, headers: { "Idempotency-Key": idempotencyKey() } });
+      msg.textContent = `job ${job.id} queued`;
+      onDone(job);
+    } catch (err) { msg.textContent = err.message; msg.className = "error"; }
+  }
+  return form;
+}

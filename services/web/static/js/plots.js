@@ -1,0 +1,130 @@
+// Plotly wrappers: the Pareto front (2-D, or 3-D for three objectives) with baselines and the
+// optimum marked, convergence (best per objective and hypervolume per generation), joint
+// signals of one solution, and fronts of several sweep cells overlaid.
+import { axis } from "./ui.js";
+
+const Plotly = window.Plotly;
+const CONFIG = { responsive: true, displaylogo: false };
+export const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
+  "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"];
+const LAYOUT = { margin: { l: 64, r: 16, t: 30, b: 50 }, hovermode: "closest",
+  legend: { orientation: "h", y: -0.2 } };
+
+export function purge(el) { if (el && el.data) Plotly.purge(el); }
+
+/** The front of `front` (GET /jobs/{id}/front) into `el`; `onPick({kind, index|name})`. */
+export function frontPlot(el, front, onPick, selected = null) {
+  const m = front.objectives.length;
+  const pts = front.points;
+  const col = (j) => pts.map((p) => p.objectives[j]);
+  const text = pts.map((p) => `point ${p.index}`);
+  const traces = [];
+  const three = m >= 3;
+  const base = three ? { type: "scatter3d" } : { type: "scatter" };
+  const xyz = (get) => (three ? { x: get(0), y: get(1), z: get(2) } : { x: get(0), y: m > 1 ? get(1) : get(0).map(() => 0) });
+  traces.push({ ...base, ...xyz(col), mode: "markers", name: "front", text,
+    customdata: pts.map((p) => ["point", p.index]),
+    marker: { size: three ? 4 : 8, color: COLORS[0], opacity: 0.85 } });
+  if (front.best_index !== null && front.best_index !== undefined) {
+    const b = pts.find((p) => p.index === front.best_index);
+    if (b) {
+      traces.push({ ...base, ...xyz((j) => [b.objectives[j]]), mode: "markers", name: "reported optimum",
+        customdata: [["point", b.index]], text: [`point ${b.index} (optimum)`],
+        marker: { size: three ? 7 : 14, symbol: three ? "diamond" : "star", color: "#ffb000",
+          line: { color: "#333", width: 1 } } });
+    }
+  }
+  const marks = front.baselines.filter((b) => b.objectives.slice(0, Math.max(1, Math.min(m, 3))).every((v) => v !== null));
+  if (marks.length) {
+    traces.push({ ...base, ...xyz((j) => marks.map((b) => b.objectives[j])), mode: three ? "markers" : "markers+text",
+      name: "baselines (study reference)", text: marks.map((b) => b.name), textposition: "top center",
+      customdata: marks.map((b) => ["baseline", b.name]),
+      marker: { size: three ? 6 : 11, symbol: three ? "square" : "diamond", color: COLORS[2] } });
+  }
+  if (selected && selected.kind === "point") {
+    const s = pts.find((p) => p.index === selected.index);
+    if (s) {
+      traces.push({ ...base, ...xyz((j) => [s.objectives[j]]), mode: "markers", name: "selected",
+        customdata: [["point", s.index]], hoverinfo: "skip",
+        marker: { size: three ? 9 : 18, color: "rgba(0,0,0,0)", line: { color: "#d62728", width: 3 } } });
+    }
+  }
+  const o = front.objectives;
+  const layout = three
+    ? { ...LAYOUT, scene: { xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: axis(o[1]) } },
+        zaxis: { title: { text: axis(o[2]) } } }, margin: { l: 0, r: 0, t: 20, b: 0 } }
+    : { ...LAYOUT, xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: m > 1 ? axis(o[1]) : "" } } };
+  Plotly.react(el, traces, layout, CONFIG);
+  el.removeAllListeners && el.removeAllListeners("plotly_click");
+  el.on("plotly_click", (ev) => {
+    const cd = ev.points && ev.points[0] && ev.points[0].customdata;
+    if (!cd) return;
+    onPick(cd[0] === "point" ? { kind: "point", index: cd[1] } : { kind: "baseline", name: cd[1] });
+  });
+}
+
+/** Best value of each objective (one subplot each) and hypervolume per generation. */
+export function convergencePlot(el, generations, objectives) {
+  const g = generations.map((r) => r.generation);
+  const m = Math.max(1, objectives.length);
+  const hv = generations.map((r) => r.hypervolume);
+  const hasHv = hv.some((v) => v !== null && v !== undefined);
+  const rows = m + (hasHv ? 1 : 0);
+  const traces = [];
+  const layout = { ...LAYOUT, grid: { rows, columns: 1, pattern: "independent" }, showlegend: false,
+    height: 130 * rows + 70, margin: { l: 70, r: 16, t: 20, b: 40 } };
+  for (let j = 0; j < m; j++) {
+    const y = generations.map((r) => (Array.isArray(r.best) ? r.best[j] : r.best));
+    const ax = j === 0 ? "" : String(j + 1);
+    traces.push({ type: "scatter", mode: "lines", x: g, y, xaxis: `x${ax}`, yaxis: `y${ax}`,
+      name: `best ${objectives[j] ? objectives[j].label : ""}`, line: { color: COLORS[j] } });
+    layout[`yaxis${ax}`] = { title: { text: `best ${axis(objectives[j])}`, font: { size: 11 } } };
+  }
+  if (hasHv) {
+    const ax = String(m + 1);
+    traces.push({ type: "scatter", mode: "lines", x: g, y: hv, xaxis: `x${ax}`, yaxis: `y${ax}`,
+      name: "hypervolume", line: { color: "#444" } });
+    layout[`yaxis${ax}`] = { title: { text: "hypervolume", font: { size: 11 } } };
+  }
+  layout[`xaxis${rows === 1 ? "" : rows}`] = { title: { text: "generation" } };
+  el.style.height = `${layout.height}px`;
+  Plotly.react(el, traces, layout, CONFIG);
+}
+
+/** One joint signal (q, qd, τ, …) of a motion (GET /jobs/{id}/motion), one line per joint. */
+export function jointPlot(el, motion, signalName) {
+  const sig = motion.signals.find((s) => s.name === signalName) || motion.signals[0];
+  if (!sig) { Plotly.react(el, [], { ...LAYOUT, title: { text: "no motion for this solution" } }, CONFIG); return; }
+  const traces = sig.values.map((ys, j) => ({ type: "scatter", mode: "lines", x: motion.t, y: ys,
+    name: motion.joint_names[j] || `joint ${j + 1}`, line: { color: COLORS[j % COLORS.length] } }));
+  Plotly.react(el, traces, { ...LAYOUT, xaxis: { title: { text: "time [s]" } },
+    yaxis: { title: { text: `${sig.label} [${sig.unit}]` } } }, CONFIG);
+}
+
+/** Fronts of sweep cells overlaid: one colour and one legend entry per cell. */
+export function overlayPlot(el, fronts) {
+  const m = fronts.objectives.length;
+  const three = m >= 3;
+  const traces = [];
+  fronts.cells.forEach((cell, i) => {
+    const color = COLORS[i % COLORS.length];
+    cell.jobs.forEach((job, k) => {
+      const P = job.points;
+      const t = { name: `cell ${cell.cell}: ${cell.label}`, legendgroup: `c${cell.cell}`, showlegend: k === 0,
+        mode: "markers", marker: { color, size: three ? 3 : 6 }, text: P.map(() => `seed ${job.seed} · ${job.job_id.slice(0, 8)}`),
+        customdata: P.map(() => job.job_id) };
+      if (three) traces.push({ ...t, type: "scatter3d", x: P.map((p) => p[0]), y: P.map((p) => p[1]), z: P.map((p) => p[2]) });
+      else traces.push({ ...t, type: "scatter", x: P.map((p) => p[0]), y: P.map((p) => (m > 1 ? p[1] : 0)) });
+    });
+  });
+  const o = fronts.objectives;
+  const layout = three
+    ? { ...LAYOUT, scene: { xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: axis(o[1]) } }, zaxis: { title: { text: axis(o[2]) } } } }
+    : { ...LAYOUT, xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: m > 1 ? axis(o[1]) : "" } } };
+  Plotly.react(el, traces, layout, CONFIG);
+  el.removeAllListeners && el.removeAllListeners("plotly_click");
+  el.on("plotly_click", (ev) => {
+    const id = ev.points && ev.points[0] && ev.points[0].customdata;
+    if (id) location.hash = `#/job/${id}`;
+  });
+}

@@ -1,0 +1,81 @@
+"""Fixtures of the chaos suite: one ``ChaosStack`` per backend kind, shared by the whole
+package (database, broker and API; each test starts and stops its own workers), and one
+``Scenario`` per test.
+
+Kinds as in tests/integration/conftest.py: ``embedded`` (SQLite + filesystem broker) always,
+``services`` (a fresh PostgreSQL database + a private Redis) when PostgreSQL answers on
+127.0.0.1:5432 and ``redis-server`` is installed; otherwise skipped with the reason.
+The stack's leases are short (4 s lease, 1 s heartbeat, checkpoint every generation).
+Teardown of the stack checks that no process it started (or a descendant) survives it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.chaos.harness import ChaosRedis, ChaosStack
+from tests.chaos.scenario import Scenario
+from tests.integration.stack import postgres_database, services_available
+
+KINDS = [
+    "embedded",
+    pytest.param(
+        "services",
+        marks=pytest.mark.skipif(
+            not services_available(), reason="PostgreSQL on 127.0.0.1:5432 or redis-server absent"
+        ),
+    ),
+]
+
+
+@pytest.fixture(scope="package", params=KINDS)
+def chaos_stack(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[ChaosStack]:
+    kind = request.param
+    tmp: Path = tmp_path_factory.mktemp(f"chaos-{kind}")
+    (tmp / "data").mkdir(parents=True, exist_ok=True)
+    if kind == "embedded":
+        st = ChaosStack(kind, tmp, f"sqlite:///{tmp / 'data' / 'legopt.db'}", "filesystem://")
+        yield from _run(st)
+        return
+    redis = ChaosRedis(tmp)
+    redis.start()
+    try:
+        with postgres_database() as url:
+            st = ChaosStack(kind, tmp, url, redis.url)
+            st.redis = redis
+            assert redis.proc is not None
+            st.track_tree(redis.proc.pid)
+            yield from _run(st)
+    finally:
+        redis.stop()
+
+
+def _run(st: ChaosStack) -> Iterator[ChaosStack]:
+    st.migrate_and_key()
+    st.start_api()
+    assert st.api is not None
+    st.track_tree(st.api.pid)
+    try:
+        yield st
+    finally:
+        st.stop()
+        if st.redis is not None:
+            st.redis.stop()
+        left = st.leftover_processes()
+        st.kill_leftovers()
+        assert not left, f"processes left after the {st.kind} stack stopped: {left}"
+
+
+@pytest.fixture
+def scenario(chaos_stack: ChaosStack, request: pytest.FixtureRequest) -> Iterator[Scenario]:
+    chaos_stack.ensure_api()
+    sc = Scenario(chaos_stack, request.node.name)
+    try:
+        yield sc
+    finally:
+        sc.close()

@@ -1,0 +1,41 @@
+"""URDF files of real robots from the ``example-robot-data`` wheel (a dev dependency).
+
+The wheel (6.0.0) ships the files only — its Python loaders are another package — under its
+cmeel prefix, ``cmeel.prefix/share/example-robot-data/robots/<robot>_description/…``, found
+through the installed distribution::
+
+    from tests.robot_files import erd_robots_dir
+    root = erd_robots_dir()            # None when the wheel is not installed
+    text = (root / ERD_URDF["ur5"]).read_text()
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+from pathlib import Path
+
+__all__ = ["ERD_URDF", "erd_robots_dir"]
+
+#: name -> path of the URDF under the wheel's robots directory.
+ERD_URDF = {
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "kinova": "kinova_description/robots/kinova.urdf",
+    "z1": "z1_description/urdf/z1.urdf",
+    "so100": "so_arm_description/urdf/so100.urdf",
+    "solo12": "solo_description/robots/solo12.urdf",
+    "anymal": "anymal_b_simple_description/robots/anymal.urdf",
+    "anymal_kinova": "anymal_b_simple_description/robots/anymal-kinova.urdf",
+    "anymal_c": "anymal_c_simple_description/urdf/anymal.urdf",
+    "go1": "go1_description/urdf/go1.urdf",
+}
+
+
+def erd_robots_dir() -> Path | None:
+    """The wheel's robots directory, or None when example-robot-data is not installed."""
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    path = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
+    return path if path.is_dir() else None
