@@ -163,6 +163,7 @@ METRICS: dict[str, dict[str, MetricName]] = {
         "step_height_m": M("step height", "m"),
         "duty": M("duty factor β", ""),
         "min_stability_margin_m": M("least static stability margin", "m", "max"),
+        "airborne": M("no foot on the ground at some instant (margin null)", kind="flag"),
         "required_stability_margin_m": M("required stability margin", "m"),
         "max_joint_speed_ratio": M("joint speed / limit (max)", ""),
         "max_torque_ratio": M("torque / servo torque (max)", ""),

@@ -323,6 +323,8 @@ class QuadrupedGaitProblem(StudyProblem):
             "step_height_m": float(x[1]),
             "duty": float(x[2]),
             "min_stability_margin_m": float(d["margin"]),
+            # no foot on the ground at some sample: the margin is -inf, stored as null + this flag
+            "airborne": float(not np.isfinite(d["margin"])),
             "required_stability_margin_m": p.stability_margin,
             "max_joint_speed_ratio": float(d["qd_ratio"]),
             "max_torque_ratio": float(d["tau_ratio"]),

@@ -132,6 +132,9 @@ class Stack:
             LEGOPT_LEASE_SECONDS="4",
             LEGOPT_HEARTBEAT_SECONDS="1",
             LEGOPT_CHECKPOINT_EVERY="1",
+            # The worker warm-up (seconds of CPU per worker start) is not under test here and
+            # the suites start hundreds of workers; the demo test keeps it on.
+            LEGOPT_WORKER_WARMUP="false",
             NUMBA_NUM_THREADS="1",
             PYTHONUNBUFFERED="1",
         )

@@ -57,6 +57,7 @@ def _env(tmp: Path) -> dict[str, str]:
         LEGOPT_LEASE_SECONDS="4",
         LEGOPT_HEARTBEAT_SECONDS="1",
         LEGOPT_CHECKPOINT_EVERY="1",
+        LEGOPT_WORKER_WARMUP="false",  # not under test here; the demo test keeps it on
         NUMBA_NUM_THREADS="1",
         PYTHONUNBUFFERED="1",
     )

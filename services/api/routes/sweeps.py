@@ -2,18 +2,15 @@
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse
-from starlette.background import BackgroundTask
 
 from services.api.deps import Context, CurrentKey, Pagination
 from services.api.errors import MAX_ERRORS, invalid, not_found, validation_error
+from services.api.merged_recordings import merged_recording
 from services.api.routes.robots import robot_lookup
 from services.api.schemas import (
     ErrorOut,
@@ -309,27 +306,20 @@ def get_sweep_recording(
             f"at most {MAX_MERGED_JOBS} jobs per merged recording, got {len(artifacts)}: "
             "choose them with ?jobs=…",
         )
-    from services.worker.rerun_writer import merge_recordings
-
     store = ctx.artifacts
     paths = []
     for _, art in artifacts:
         store.verify(art.relative_path, art.sha256)
         paths.append(store.path(art.relative_path))
     names = [f"{i + 1}_{job_id[:8]}" for i, (job_id, _) in enumerate(artifacts)]
-    tmpdir = Path(tempfile.mkdtemp(prefix="legopt-merge-"))
-    out = tmpdir / f"sweep-{sweep.id}.rrd"
+    digests = [art.sha256 for _, art in artifacts]
     try:
-        merge_recordings(paths, out, names)
-    except (RuntimeError, ValueError, OSError) as exc:
-        shutil.rmtree(tmpdir, ignore_errors=True)
+        out = merged_recording(paths, names, digests, ctx.settings.cache_dir)
+    except RuntimeError as exc:
         raise ArtifactError(
-            f"the recordings of sweep {sweep.id} could not be merged ({type(exc).__name__}: "
-            f"{exc}); download them one by one from /jobs/{{id}}/recording"
+            f"the recordings of sweep {sweep.id} could not be merged ({exc}); download them "
+            "one by one from /jobs/{id}/recording"
         ) from None
     return FileResponse(
-        out,
-        media_type="application/octet-stream",
-        filename=out.name,
-        background=BackgroundTask(shutil.rmtree, tmpdir, ignore_errors=True),
+        out, media_type="application/octet-stream", filename=f"sweep-{sweep.id}.rrd"
     )

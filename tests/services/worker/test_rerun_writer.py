@@ -329,6 +329,29 @@ def test_merge_recordings(tmp_path: Path) -> None:
         W.merge_recordings([a, b], out, ["only one"])
 
 
+def test_merged_recording_is_made_in_a_child_once_and_cached(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from services.api import merged_recordings as M
+
+    a, b = tmp_path / "a.rrd", tmp_path / "b.rrd"
+    W.write_recording(fake_result(arm_motion(K=100), generations=2), a, recording_id="job-a")
+    W.write_recording(fake_result(arm_motion(K=120), generations=2), b, recording_id="job-b")
+    cache = tmp_path / "cache"
+    out = M.merged_recording([a, b], ["1_a", "2_b"], ["da", "db"], cache)
+    assert out.parent == cache / "merged" and "jobs/2_b/signals/q" in read_back(out)
+    calls: list[object] = []
+    monkeypatch.setattr(M.subprocess, "run", lambda *a, **k: calls.append(a))
+    assert M.merged_recording([a, b], ["1_a", "2_b"], ["da", "db"], cache) == out
+    assert not calls  # the second download reads the cached file
+    monkeypatch.undo()
+    with pytest.raises(RuntimeError, match="not found"):
+        M.merged_recording([a, tmp_path / "gone.rrd"], ["1_a", "2_b"], ["da", "dx"], cache)
+    monkeypatch.setattr(M, "KEEP", 0)
+    M._prune(cache / "merged")
+    assert not list((cache / "merged").glob("*.rrd"))
+
+
 def views(container: object) -> list[tuple[str, str, str]]:
     """(view class, origin, name) of every view under a blueprint container, depth first."""
     out: list[tuple[str, str, str]] = []
