@@ -66,8 +66,9 @@ def one(example: str, seeds: list[int], headline: tuple[str, ...]) -> str:
     if np.all(np.isfinite(f)) and np.any(o != f):
         p = f"{wilcoxon(o - f, alternative='less').pvalue:.2g}"
     heads = " | ".join(f"{k} {_ms(np.asarray(v, dtype=float))}" for k, v in cols.items())
+    free_col = f"{_ms(f)} ({free_what})" if free_what else "— "
     return (f"| {example} ({time.perf_counter() - t0:.0f} s) | {name} | {_ms(o)} | {_ms(i)} | "
-            f"{_ms(f) if free_what else '—'} {f'({free_what})' if free_what else ''} | {p} | {heads} |")
+            f"{free_col} | {p} | {heads} |")
 
 
 def main() -> None:

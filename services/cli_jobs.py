@@ -144,7 +144,9 @@ def cancel(
                 job = _cancel_one(c, jid)
                 state = job["status"]
                 if job.get("_finished"):
-                    console.print(f"job {short(jid)}: already finished ({state}), nothing to cancel")
+                    console.print(
+                        f"job {short(jid)}: already finished ({state}), nothing to cancel"
+                    )
                     continue
                 if state not in ("cancelled",) and job.get("cancel_requested"):
                     state = "cancel requested (it stops after its current generation)"

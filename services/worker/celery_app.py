@@ -144,6 +144,19 @@ def _one_job_per_process_on_the_embedded_broker(sender: object = None, **_: obje
 
 
 @signals.worker_init.connect
+def _import_database_driver(**_: object) -> None:
+    """Import the database driver (psycopg for PostgreSQL) in the main process before any
+    thread starts or pool child is forked. Imported lazily instead, by the dispatcher thread
+    building its engine, a child forked mid-import inherits the module half-initialised with its
+    import lock held by a thread that does not exist in the child: the child's first
+    ``session_scope`` then blocks forever (seen in the pool-child chaos test)."""
+    from sqlalchemy.engine import make_url
+
+    url = make_url(get_settings().database_url)
+    url.get_dialect().import_dbapi()
+
+
+@signals.worker_init.connect
 def _cache_environment(**_: object) -> None:
     """Warm starts (issue 12): seed 000's baselines cached under the data directory
     (``LEGOPT_CACHE_DIR``, read when a job computes them). ``NUMBA_CACHE_DIR`` only counts

@@ -20,7 +20,10 @@
    size and SHA-256, and every succeeded job submitted with ``record: true`` has a recording.
 5. **No orphans**: see ``ChaosStack.leftover_processes`` (checked by the scenario).
 6. **Messages per job**: ``dispatched`` events per job; mean <= 3 and, per job,
-   <= 1 + the number of faults that happened while the job was not terminal. Without
+   <= 1 + the number of faults that happened while the job was not terminal, + 1 after a
+   fault: the dispatcher's one early re-send when the broker holds fewer messages than there
+   are queued jobs (a message a live worker has taken but not yet claimed is not counted by
+   the broker, so one rescue of it may be a duplicate; a storm is still caught). Without
    ``job_events`` the count is *estimated from the worker logs* (1 API send + each job id in a
    reaper's ``re-sent [...]`` line), reported, and held to the same bound.
 """
@@ -289,10 +292,11 @@ def check_messages(
     if mean > mean_limit:
         r.fail(f"{mean:.2f} messages per job on average ({source}), limit {mean_limit}")
     for row in rows:
-        bound = 1 + faults_during(row, faults, now)
+        during = faults_during(row, faults, now)
+        bound = 1 + during + (1 if during else 0)
         if per_job[row["id"]] > bound:
             r.fail(f"job {row['id']}: {per_job[row['id']]} messages ({source}), bound {bound} "
-                   f"(1 + faults while it was live)")  # fmt: skip
+                   f"(1 + faults while it was live, + 1 rescue after a fault)")  # fmt: skip
         if view.events is not None and per_job[row["id"]] == 0 and row["attempt_count"] > 0:
             r.fail(f"job {row['id']} was claimed without any 'dispatched' event")
 

@@ -18,7 +18,9 @@ def test_change_pct_is_the_improvement_of_a_minimised_value() -> None:
 
 
 def test_earned_summary_names_what_the_search_added() -> None:
-    s = earned_summary(("f",), np.array([1.0]), 0.0, (np.array([4.0]), 0.0), ("zero", np.array([1.0]), 0.0))
+    s = earned_summary(
+        ("f",), np.array([1.0]), 0.0, (np.array([4.0]), 0.0), ("zero", np.array([1.0]), 0.0)
+    )
     row = s["objectives"][0]
     assert row["earned_pct"] == pytest.approx(75.0) and row["earned_over_free_pct"] == 0.0
     assert "nothing over zero" in s["verdict"]
