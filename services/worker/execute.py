@@ -371,7 +371,8 @@ def _store_attempt(
                 summary={
                     "table": best["table"],
                     "extra": best["extra"],
-                    "extras": doc["extras"],
+                    # the study's extras (up to ~0.5 MB: workspaces, masks) live in result.json
+                    # only; GET /jobs/{id}/result reads them from there (issue 12: overhead)
                     "optimizer": doc["optimizer"],
                     "start": doc.get("start"),
                     "history": doc["history"],

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import json
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, HTTPException, Query, Response, status
 from fastapi.responses import FileResponse
 from sqlalchemy.orm import Session
 
-from services.api.deps import MAX_OFFSET, Context, CurrentKey, Pagination
+from services.api.deps import MAX_OFFSET, ApiContext, Context, CurrentKey, Pagination
 from services.api.errors import not_found
 from services.api.routes.robots import robot_lookup
 from services.api.schemas import (
@@ -38,7 +39,7 @@ from services.store import lifecycle
 from services.store import repository as repo
 from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
-from services.store.records import JobRecord
+from services.store.records import ArtifactRecord, JobRecord
 from services.store.specs import json_size
 from services.store.tables import JobStatus
 
@@ -183,7 +184,21 @@ def get_result(job_id: str, key: CurrentKey, ctx: Context) -> ResultOut:
             raise _no_output(job, "result")
         baselines = repo.list_baselines(session, job.id)
         artifacts = repo.list_artifacts(session, job.id)
-    return ResultOut.from_records(result, baselines, artifacts)
+    out = ResultOut.from_records(result, baselines, artifacts)
+    summary = out.summary
+    if isinstance(summary, dict) and "extras" not in summary:
+        out.summary = {**summary, "extras": _stored_extras(ctx, artifacts)}
+    return out
+
+
+def _stored_extras(ctx: ApiContext, artifacts: tuple[ArtifactRecord, ...]) -> Any:
+    """The study's extras from the job's ``result.json`` (the worker keeps them out of the
+    database row); ``{}`` for a job without that artifact."""
+    art = next((a for a in artifacts if a.kind == "result"), None)
+    if art is None:
+        return {}
+    doc = json.loads(ctx.artifacts.read(art.relative_path, art.sha256))
+    return doc.get("extras") or {}
 
 
 @router.get(
