@@ -96,8 +96,9 @@ METRICS: dict[str, dict[str, MetricName]] = {
     },
     "path_placement": {
         "J": M("cost J = energy + manipulability terms", "", "min", "J"),
-        "energy_J": M("energy (electrical with motor data, else mechanical: extra.energy_kind)",
-                      "J", "min", "E"),
+        "energy_J": M("energy", "J", "min", "E",
+                      note="electrical where the robot has motor data, else mechanical "
+                      "(extra.energy_kind says which)"),
         "energy_kWh": M("energy", "kWh", same_as="energy_J"),
         "mean_manipulability": M("mean manipulability", "m³", "max", "w̄"),
         "mean_manipulability_ratio": M("mean manipulability / its maximum", "", "max"),
