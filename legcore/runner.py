@@ -76,7 +76,15 @@ def prepare(spec: JobSpec | dict[str, Any]) -> Prepared:
     spec = parse_job_spec(spec)
     study = get_study(spec.problem.kind)
     robot = resolve_robot(spec, study)
-    problem = study.build(robot, spec.problem)
+    return assemble(spec, study, robot, study.build(robot, spec.problem))
+
+
+def assemble(
+    spec: JobSpec, study: Study, robot: Robot | LeggedRobot, problem: StudyProblem
+) -> Prepared:
+    """The :class:`Prepared` job of a parsed ``spec`` whose study, robot and built problem are
+    given: the optimiser (the study's default unless the spec names one) and the termination
+    from the budget (the study's default generations when only ``ftol`` is given)."""
     opt = spec.optimizer
     kind = opt.kind if opt is not None else study.default_optimizer["kind"]
     params = dict(opt.params) if opt is not None else dict(study.default_optimizer["params"])

@@ -36,7 +36,6 @@ from typing import Any
 
 from legcore import runner
 from legcore.jobspec import JobSpec
-from legcore.optimizers import get_algorithm, termination_from_budget
 from legcore.problems.registry import get_study
 from legcore.robots import LeggedRobot, Robot, build_any_robot
 from legcore.runner import JobSize, Prepared
@@ -171,22 +170,7 @@ def prepare_with(
     problem = problems.get(problem_key)
     if problem is None:
         problem = problems[problem_key] = study.build(robot, spec.problem)
-    opt = spec.optimizer
-    kind = opt.kind if opt is not None else study.default_optimizer["kind"]
-    params = dict(opt.params) if opt is not None else dict(study.default_optimizer["params"])
-    algorithm = get_algorithm(kind, **params)
-    b = spec.budget
-    generations = b.generations
-    if generations is None and b.evaluations is None and b.wall_time_s is None:  # ftol alone
-        generations = study.default_generations
-    termination = termination_from_budget(
-        n_gen=generations,
-        n_evals=b.evaluations,
-        seconds=b.wall_time_s,
-        ftol=b.ftol,
-        window=b.window,
-    )
-    return Prepared(spec, study, robot, problem, algorithm, termination, generations)
+    return runner.assemble(spec, study, robot, problem)
 
 
 #: Robots ``build_robot_cached`` keeps (a 1.7 MB URDF model is a few MB in memory).

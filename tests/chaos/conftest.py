@@ -18,17 +18,24 @@ import pytest
 
 from tests.chaos.harness import ChaosRedis, ChaosStack
 from tests.chaos.scenario import Scenario
-from tests.integration.stack import postgres_database, services_available
+from tests.integration.stack import KINDS, postgres_database
 
-KINDS = [
-    "embedded",
-    pytest.param(
-        "services",
-        marks=pytest.mark.skipif(
-            not services_available(), reason="PostgreSQL on 127.0.0.1:5432 or redis-server absent"
-        ),
-    ),
-]
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """``@pytest.mark.stacks("embedded")``: the test exists only for those stack kinds (the
+    other kinds' instances are deselected, not skipped: there is nothing there to prove)."""
+    keep: list[pytest.Item] = []
+    drop: list[pytest.Item] = []
+    for item in items:
+        mark = item.get_closest_marker("stacks")
+        callspec = getattr(item, "callspec", None)
+        kind = callspec.params.get("chaos_stack") if callspec is not None else None
+        (drop if mark is not None and kind is not None and kind not in mark.args else keep).append(
+            item
+        )
+    if drop:
+        config.hook.pytest_deselected(items=drop)
+        items[:] = keep
 
 
 @pytest.fixture(scope="package", params=KINDS)

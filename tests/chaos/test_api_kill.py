@@ -15,24 +15,14 @@ from typing import Any
 import pytest
 from sqlalchemy import func, select
 
-from tests.chaos.harness import ChaosStack
 from tests.chaos.scenario import Scenario
-from tests.chaos.workload import Submitted, idempotency_supported, job_spec, submit_sweep
+from tests.chaos.workload import Submitted, job_spec, submit_sweep
 
 pytestmark = [pytest.mark.integration, pytest.mark.chaos]
 
 BURST = 16
 SWEEP_JOBS = 40
 JOB_S = 1.5
-
-
-def _idempotency(stack: ChaosStack) -> tuple[bool, bool]:
-    """(POST /jobs, POST /sweeps) honour ``Idempotency-Key`` — probed once per stack."""
-    cached: tuple[bool, bool] | None = getattr(stack, "idempotency", None)
-    if cached is None:
-        cached = idempotency_supported(stack.url, stack.key)
-        stack.idempotency = cached  # type: ignore[attr-defined]
-    return cached
 
 
 def _seed(row: dict[str, Any]) -> Any:
@@ -45,7 +35,6 @@ def _seed(row: dict[str, Any]) -> Any:
 def test_kill_9_api_during_submit_burst(scenario: Scenario) -> None:
     sc = scenario
     sc.start_workers(1, 1)
-    jobs_idem, _ = _idempotency(sc.stack)
     done: list[Submitted] = []
     errors: list[BaseException] = []
 
@@ -75,15 +64,12 @@ def test_kill_9_api_during_submit_burst(scenario: Scenario) -> None:
     dupes = {seed: n for seed, n in per_seed.items() if n > 1}
     sc.metrics["duplicate_jobs"] = sum(n - 1 for n in dupes.values())
     sc.verify()
-    if not jobs_idem:
-        pytest.skip(f"POST /jobs ignores Idempotency-Key: duplicate check skipped ({dupes=})")
     assert not dupes, f"a retried POST created duplicate jobs (seed: count): {dupes}"
 
 
 def test_kill_9_api_right_after_sweep_commit(scenario: Scenario) -> None:
     sc = scenario
     sc.start_workers(1, 1)
-    _, sweeps_idem = _idempotency(sc.stack)
     since = sc.t0
     doc = {"base": job_spec(generations=1), "seeds": list(range(600, 600 + SWEEP_JOBS))}
     key = f"chaos-sweep-{uuid.uuid4()}"
@@ -130,6 +116,4 @@ def test_kill_9_api_right_after_sweep_commit(scenario: Scenario) -> None:
     # and re-sent at the next dispatcher pass; two passes and 1 s of slack on top
     period = float(sc.stack.env.get("LEGOPT_DISPATCH_PERIOD_S", "1.0"))
     sc.verify(strict_queue=(first_jobs, sc.lease_s + 2 * period + 1.0))
-    if not sweeps_idem:
-        pytest.skip(f"POST /sweeps ignores Idempotency-Key: {len(sweeps)} sweeps for one key")
     assert len(sweeps) == 1, f"the retried sweep POST created another sweep: {sweeps}"

@@ -28,10 +28,9 @@ def _generation(sc: Scenario, job_id: str) -> int:
     return o.generation if o is not None else 0
 
 
+@pytest.mark.stacks("services")  # the embedded broker is files: no broker process to kill
 def test_kill_9_redis_with_jobs_queued_and_running(scenario: Scenario) -> None:
     sc = scenario
-    if sc.stack.kind != "services":
-        pytest.skip("kill -9 Redis: the services stack only (the embedded broker is files)")
     w1, w2 = sc.start_workers(1, 1)
     for i in range(N_JOBS):
         sc.submit(job_spec(seed=400 + i, generations=GENERATIONS))

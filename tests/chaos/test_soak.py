@@ -37,10 +37,9 @@ def _sample(pid: int) -> dict[str, float]:
     return {"threads": p.num_threads(), "rss_mb": p.memory_info().rss / 2**20}
 
 
+@pytest.mark.stacks("embedded")  # the leak is in the worker process, the same on both stacks
 def test_soak_200_recorded_jobs_one_worker(scenario: Scenario) -> None:
     sc = scenario
-    if sc.stack.kind != "embedded":
-        pytest.skip("soak: embedded stack only (the leak is in the worker process)")
     worker = sc.start_worker(1)
     samples: dict[int, dict[str, float]] = {}
     errors: list[BaseException] = []
@@ -84,10 +83,9 @@ def test_soak_200_recorded_jobs_one_worker(scenario: Scenario) -> None:
     )
 
 
+@pytest.mark.stacks("embedded")  # the leak is in the API process, the same on both stacks
 def test_sweep_recording_downloads_do_not_leak_in_the_api(scenario: Scenario) -> None:
     sc = scenario
-    if sc.stack.kind != "embedded":
-        pytest.skip("API leak: embedded stack only (the leak is in the API process)")
     sc.start_worker(1)
     doc: dict[str, Any] = {"base": job_spec(generations=1, record=True), "seeds": [1100, 1101]}
     sweep, ids = submit_sweep(sc.stack.url, sc.stack.key, doc)

@@ -122,15 +122,3 @@ def submit_sweep(
     key = idem_key or f"chaos-{uuid.uuid4()}"
     out, attempts = post(url, api_key, "/sweeps", doc, idem_key=key, **kw)
     return Submitted(key, str(out["id"]), attempts, doc), [str(j) for j in out["job_ids"]]
-
-
-def idempotency_supported(url: str, api_key: str) -> tuple[bool, bool]:
-    """Probe: does the same ``Idempotency-Key`` return the same job / the same sweep?
-    (Creates two one-generation jobs and one or two one-job sweeps.)"""
-    spec = job_spec(seed=99, generations=1)
-    a = submit(url, api_key, spec, idem_key=f"probe-{uuid.uuid4()}")
-    b = submit(url, api_key, spec, idem_key=a.key)
-    doc = {"base": job_spec(seed=98, generations=1), "seeds": [98]}
-    sa, _ = submit_sweep(url, api_key, doc, idem_key=f"probe-{uuid.uuid4()}")
-    sb, _ = submit_sweep(url, api_key, doc, idem_key=sa.key)
-    return a.resource_id == b.resource_id, sa.resource_id == sb.resource_id

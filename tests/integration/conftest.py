@@ -7,17 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.stack import RedisServer, Stack, postgres_database, services_available
-
-KINDS = [
-    "embedded",
-    pytest.param(
-        "services",
-        marks=pytest.mark.skipif(
-            not services_available(), reason="PostgreSQL on 127.0.0.1:5432 or redis-server absent"
-        ),
-    ),
-]
+from tests.integration.stack import KINDS, RedisServer, Stack, postgres_database
 
 
 @pytest.fixture(scope="module", params=KINDS)

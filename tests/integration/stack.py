@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import pytest
 
 from services.client import Client
 from services.embedded import worker_command
@@ -59,6 +60,19 @@ def redis_server_binary() -> str | None:
 
 def services_available() -> bool:
     return postgres_available() and redis_server_binary() is not None
+
+
+#: The stack kinds a service test runs on: ``embedded`` always, ``services`` (PostgreSQL +
+#: Redis) where both are available (skipped with the reason otherwise).
+KINDS = [
+    "embedded",
+    pytest.param(
+        "services",
+        marks=pytest.mark.skipif(
+            not services_available(), reason="PostgreSQL on 127.0.0.1:5432 or redis-server absent"
+        ),
+    ),
+]
 
 
 @contextmanager

@@ -4,18 +4,14 @@ size budget documented in docs/recording.md §3 ("Size budget of a job's artifac
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
-
-import pytest
 
 from services.store import repository as repo
 from services.store.artifacts import ArtifactStore
 from services.store.keys import generate_api_key
-from services.store.migrate import upgrade
-from services.store.session import reset_engine, session_scope
-from services.store.settings import Settings, get_settings
+from services.store.session import session_scope
+from services.store.settings import Settings
 from services.worker import execute
 
 #: The documented budget of a tiny job (docs/recording.md §3), bytes.
@@ -27,21 +23,6 @@ TINY: dict[str, Any] = {  # the issue's 3-generation job: seed 002's study, its 
     "seed": 1,
     "record": True,
 }
-
-
-@pytest.fixture
-def settings(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Settings]:
-    url = f"sqlite:///{tmp_path / 'legopt.db'}"
-    monkeypatch.setenv("LEGOPT_DATA_DIR", str(tmp_path))
-    monkeypatch.setenv("LEGOPT_DATABASE_URL", url)
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    try:
-        yield get_settings()
-    finally:
-        get_settings.cache_clear()
-        reset_engine()
 
 
 def test_a_tiny_jobs_artifacts_are_within_the_documented_budget(settings: Settings) -> None:

@@ -5,9 +5,7 @@ job resumed from a checkpoint ends exactly where the uninterrupted run ends."""
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from datetime import timedelta
-from pathlib import Path
 from typing import Any
 
 import pytest
@@ -22,10 +20,9 @@ from services.store.lifecycle import (
     requeue_expired,
     save_checkpoint,
 )
-from services.store.migrate import upgrade
 from services.store.repository import now_utc
-from services.store.session import reset_engine, session_scope
-from services.store.settings import Settings, get_settings
+from services.store.session import session_scope
+from services.store.settings import Settings
 from services.worker import execute
 
 SPEC: dict[str, Any] = {
@@ -34,22 +31,6 @@ SPEC: dict[str, Any] = {
     "seed": 3,
     "record": False,
 }
-
-
-@pytest.fixture
-def settings(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Settings]:
-    url = f"sqlite:///{tmp_path / 'legopt.db'}"
-    monkeypatch.setenv("LEGOPT_DATA_DIR", str(tmp_path))
-    monkeypatch.setenv("LEGOPT_DATABASE_URL", url)
-    monkeypatch.setenv("LEGOPT_CHECKPOINT_EVERY", "1")
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    try:
-        yield get_settings()
-    finally:
-        get_settings.cache_clear()
-        reset_engine()
 
 
 def _job(spec: dict[str, Any], total: int = 6) -> str:

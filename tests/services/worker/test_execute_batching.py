@@ -4,7 +4,6 @@ job was resumed), and checkpoints of fast generations at least ``CHECKPOINT_MIN_
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -15,9 +14,8 @@ from services.store import lifecycle
 from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.lifecycle import latest_checkpoint, request_cancel
-from services.store.migrate import upgrade
-from services.store.session import reset_engine, session_scope
-from services.store.settings import Settings, get_settings
+from services.store.session import session_scope
+from services.store.settings import Settings
 from services.worker import execute
 
 SPEC: dict[str, Any] = {
@@ -27,22 +25,6 @@ SPEC: dict[str, Any] = {
     "seed": 1,
     "record": False,
 }
-
-
-@pytest.fixture
-def settings(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Settings]:
-    url = f"sqlite:///{tmp_path / 'legopt.db'}"
-    monkeypatch.setenv("LEGOPT_DATA_DIR", str(tmp_path))
-    monkeypatch.setenv("LEGOPT_DATABASE_URL", url)
-    monkeypatch.setenv("LEGOPT_CHECKPOINT_EVERY", "1")
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    try:
-        yield get_settings()
-    finally:
-        get_settings.cache_clear()
-        reset_engine()
 
 
 def _job(spec: dict[str, Any]) -> str:
