@@ -28,8 +28,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import threading
-from collections import OrderedDict
 from collections.abc import Callable, MutableMapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -40,6 +38,7 @@ from legcore.problems.registry import get_study
 from legcore.robots import LeggedRobot, Robot, build_any_robot
 from legcore.runner import JobSize, Prepared
 from services.api.errors import invalid
+from services.lru import BuiltCache
 
 #: Strings longer than this are digested instead of quoted in a key (characters).
 _INLINE_STRING = 64
@@ -174,28 +173,15 @@ def prepare_with(
 
 
 #: Robots ``build_robot_cached`` keeps (a 1.7 MB URDF model is a few MB in memory).
-_ROBOT_LRU_SIZE = 8
-_robot_lru: OrderedDict[str, Robot | LeggedRobot] = OrderedDict()
-_robot_lru_lock = threading.Lock()
+_robots: BuiltCache[Robot | LeggedRobot] = BuiltCache(8)
 
 
 def build_robot_cached(spec: dict[str, Any]) -> Robot | LeggedRobot:
     """``legcore.robots.build_any_robot(spec)`` for a stored inline robot document, shared by the
-    requests of this process: the last ``_ROBOT_LRU_SIZE`` distinct documents (by content) stay
-    built, so reading a stored 1.7 MB URDF robot costs a digest (~5 ms), not a build (~0.5 s).
+    requests of this process: the last few distinct documents (by content) stay built, so
+    reading a stored 1.7 MB URDF robot costs a digest (~5 ms), not a build (~0.5 s).
     Robots are never modified after they are built, so sharing them is safe."""
-    key = content_key(spec, {})
-    with _robot_lru_lock:
-        robot = _robot_lru.get(key)
-        if robot is not None:
-            _robot_lru.move_to_end(key)
-            return robot
-    robot = build_any_robot(spec)
-    with _robot_lru_lock:
-        _robot_lru[key] = robot
-        while len(_robot_lru) > _ROBOT_LRU_SIZE:
-            _robot_lru.popitem(last=False)
-    return robot
+    return _robots.get_or_build(content_key(spec, {}), lambda: build_any_robot(spec))
 
 
 def robot_kind(robot: Robot | LeggedRobot) -> str:

@@ -15,8 +15,6 @@ the same baselines, the stored history and per-generation fronts, named after th
 from __future__ import annotations
 
 import json
-import threading
-from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +25,7 @@ import numpy as np
 from legcore.problems.study import Motion, Solution
 from legcore.recording import SIGNALS, stride_indices
 from legcore.runner import Prepared, RunResult, prepare
+from services.lru import BuiltCache
 
 __all__ = [
     "DecodedPoint",
@@ -54,27 +53,16 @@ class DecodedPoint:
     solution: Solution
 
 
-_PREPARED_CACHE = 4
-_prepared: OrderedDict[str, Prepared] = OrderedDict()
-_prepared_lock = threading.Lock()
+_prepared: BuiltCache[Prepared] = BuiltCache(4)
 
 
 def prepare_cached(spec: Any) -> Prepared:
     """``legcore.runner.prepare(spec)``, the last few distinct specs of this process kept
     built (building a problem can take seconds; decoding a point takes milliseconds). A
     prepared problem is not modified by decoding, so sharing it is safe."""
-    key = json.dumps(spec, sort_keys=True, default=str)
-    with _prepared_lock:
-        hit = _prepared.get(key)
-        if hit is not None:
-            _prepared.move_to_end(key)
-            return hit
-    built = prepare(spec)
-    with _prepared_lock:
-        _prepared[key] = built
-        while len(_prepared) > _PREPARED_CACHE:
-            _prepared.popitem(last=False)
-    return built
+    return _prepared.get_or_build(
+        json.dumps(spec, sort_keys=True, default=str), lambda: prepare(spec)
+    )
 
 
 def decode_point(spec: Any, x: Sequence[float]) -> DecodedPoint:

@@ -30,7 +30,7 @@ import pytest
 import yaml
 
 from tests.docs.blocks import BashSession, Block, PythonSession, code_blocks, venv_path
-from tests.integration.stack import Stack
+from tests.integration.stack import Stack, embedded_stack
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -48,15 +48,8 @@ pytestmark = pytest.mark.integration
 @pytest.fixture(scope="module")
 def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Stack]:
     tmp = tmp_path_factory.mktemp("docs-stack")
-    (tmp / "data").mkdir()
-    st = Stack("embedded", tmp, f"sqlite:///{tmp / 'data' / 'legopt.db'}", "filesystem://")
-    st.migrate_and_key()
-    st.start_api()
-    st.start_worker()
-    try:
+    with embedded_stack(tmp) as st:
         yield st
-    finally:
-        st.stop()
 
 
 def _runnable(blocks: list[Block]) -> list[Block]:

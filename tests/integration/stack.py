@@ -253,3 +253,19 @@ class Stack:
                 if time.monotonic() > deadline:
                     raise AssertionError(f"timeout waiting for {job_id}: {job}\n{self.log_tail()}")
                 time.sleep(0.2)
+
+
+@contextmanager
+def embedded_stack(tmp: Path, env: dict[str, str] | None = None) -> Iterator[Stack]:
+    """The embedded service (SQLite + filesystem broker, API + one worker) on a fresh data
+    directory under ``tmp``; ``env``: extra environment of its processes. Stopped on exit."""
+    (tmp / "data").mkdir(parents=True, exist_ok=True)
+    st = Stack("embedded", tmp, f"sqlite:///{tmp / 'data' / 'legopt.db'}", "filesystem://")
+    st.env.update(env or {})
+    st.migrate_and_key()
+    st.start_api()
+    st.start_worker()
+    try:
+        yield st
+    finally:
+        st.stop()

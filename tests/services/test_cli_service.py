@@ -16,7 +16,7 @@ import yaml
 from typer.testing import CliRunner
 
 from services.cli import app
-from tests.integration.stack import Stack
+from tests.integration.stack import Stack, embedded_stack
 
 ROOT = Path(__file__).resolve().parents[2]
 runner = CliRunner()
@@ -27,15 +27,8 @@ pytestmark = pytest.mark.integration
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Stack]:
     tmp = tmp_path_factory.mktemp("cli-stack")
-    (tmp / "data").mkdir()
-    st = Stack("embedded", tmp, f"sqlite:///{tmp / 'data' / 'legopt.db'}", "filesystem://")
-    st.migrate_and_key()
-    st.start_api()
-    st.start_worker()
-    try:
+    with embedded_stack(tmp) as st:
         yield st
-    finally:
-        st.stop()
 
 
 def cli(stack: Stack, *args: str) -> tuple[int, str]:

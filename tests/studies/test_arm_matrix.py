@@ -141,18 +141,11 @@ def test_a_5_joint_arm_tracks_but_does_not_place(robot_spec: SpecOf) -> None:
 
 @pytest.fixture(scope="module")
 def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    from tests.integration.stack import Stack
+    from tests.integration.stack import embedded_stack
 
     tmp: Path = tmp_path_factory.mktemp("arm-matrix")
-    (tmp / "data").mkdir()
-    st = Stack("embedded", tmp, f"sqlite:///{tmp / 'data' / 'legopt.db'}", "filesystem://")
-    st.migrate_and_key()
-    st.start_api()
-    st.start_worker()
-    try:
+    with embedded_stack(tmp) as st:
         yield st
-    finally:
-        st.stop()
 
 
 @pytest.mark.integration

@@ -23,7 +23,7 @@ from typing import Any
 import pytest
 
 from services.client import TERMINAL, ApiError
-from tests.integration.stack import ROOT, Stack
+from tests.integration.stack import ROOT, Stack, embedded_stack
 from tests.robot_files import ERD_URDF, erd_robots_dir
 
 pytestmark = pytest.mark.integration
@@ -52,16 +52,8 @@ def stack(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Stack]:
         pytest.skip("example-robot-data is not installed (dev dependency)")
     tmp = tmp_path_factory.mktemp("studies-stack")
     site = _install_plugin(tmp)
-    (tmp / "data").mkdir()
-    st = Stack("embedded", tmp, f"sqlite:///{tmp / 'data' / 'legopt.db'}", "filesystem://")
-    st.env["PYTHONPATH"] = os.pathsep.join([str(site), str(ROOT)])
-    st.migrate_and_key()
-    st.start_api()
-    st.start_worker()
-    try:
+    with embedded_stack(tmp, {"PYTHONPATH": os.pathsep.join([str(site), str(ROOT)])}) as st:
         yield st
-    finally:
-        st.stop()
 
 
 def _urdf(name: str, **extra: Any) -> dict[str, Any]:

@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from tests.integration.stack import Stack
+from tests.integration.stack import Stack, embedded_stack
 
 CHROMIUM_ARGS = [
     "--no-sandbox",
@@ -60,15 +60,8 @@ def browser() -> Iterator[Any]:
 def stack(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Stack]:
     """The embedded service (API + one worker) on a fresh data directory."""
     tmp = tmp_path_factory.mktemp("web-stack")
-    (tmp / "data").mkdir()
-    st = Stack("embedded", tmp, f"sqlite:///{tmp / 'data' / 'legopt.db'}", "filesystem://")
-    st.migrate_and_key()
-    st.start_api()
-    st.start_worker()
-    try:
+    with embedded_stack(tmp) as st:
         yield st
-    finally:
-        st.stop()
 
 
 @pytest.fixture(scope="module")
