@@ -95,30 +95,7 @@ def set_path(doc: dict[str, Any], path: str, value: Any) -> None:
     ValueError naming the path when it runs through a scalar (e.g. ``robot.joints.1.mass`` on a
     catalog robot name) or past the end of a list.
     """
-    segments = split_path(path)
-    current: Any = doc
-    for depth, seg in enumerate(segments):
-        last = depth == len(segments) - 1
-        where = ".".join(segments[:depth]) or "the spec"
-        if isinstance(current, dict):
-            if last:
-                current[seg] = copy.deepcopy(value)
-                return
-            nxt = current.get(seg)
-            if nxt is None:
-                nxt = current[seg] = {}
-            current = nxt
-        elif isinstance(current, list):
-            if not seg.isdigit() or int(seg) >= len(current):
-                raise ValueError(
-                    f"{where} is a list of {len(current)} items: no index {seg!r} in {path!r}"
-                )
-            if last:
-                current[int(seg)] = copy.deepcopy(value)
-                return
-            current = current[int(seg)]
-        else:
-            raise ValueError(_not_an_object(segments, depth, current, path))
+    _set_owned(doc, path, copy.deepcopy(value), None)
 
 
 class OverrideError(ValueError):
@@ -150,17 +127,19 @@ def with_overrides(base: Mapping[str, Any], overrides: Mapping[str, Any]) -> dic
     return spec
 
 
-def _own(container: Any, owned: set[int]) -> Any:
-    """``container`` itself when this result created it, else a shallow copy it now owns."""
-    if id(container) in owned:
+def _own(container: Any, owned: set[int] | None) -> Any:
+    """``container`` itself when this result created it (or ``owned`` is None: the whole
+    document is the caller's), else a shallow copy it now owns."""
+    if owned is None or id(container) in owned:
         return container
     copied = dict(container) if isinstance(container, dict) else list(container)
     owned.add(id(copied))
     return copied
 
 
-def _set_owned(doc: dict[str, Any], path: str, value: Any, owned: set[int]) -> None:
-    """``set_path`` on a copy-on-write document: each container on the way is ``_own``-ed."""
+def _set_owned(doc: dict[str, Any], path: str, value: Any, owned: set[int] | None) -> None:
+    """Set ``path`` to ``value``; each container on the way is ``_own``-ed (copy-on-write),
+    or, with ``owned`` None, written in place."""
     segments = split_path(path)
     current: Any = doc
     for depth, seg in enumerate(segments):
@@ -173,7 +152,8 @@ def _set_owned(doc: dict[str, Any], path: str, value: Any, owned: set[int]) -> N
             nxt = current.get(seg)
             if nxt is None:
                 nxt = {}
-                owned.add(id(nxt))
+                if owned is not None:
+                    owned.add(id(nxt))
             elif isinstance(nxt, dict | list):
                 nxt = _own(nxt, owned)
             current[seg] = nxt

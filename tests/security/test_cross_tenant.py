@@ -33,6 +33,7 @@ from services.store import migrate
 from services.store.keys import generate_api_key
 from services.store.repository import create_api_key
 from services.store.settings import Settings
+from tests.services.api.api_helpers import dh_spec
 
 API = "/api/v1"
 PATH_PARAM = re.compile(r"{(\w+)(?::[^}]*)?}")
@@ -40,24 +41,7 @@ PATH_PARAM = re.compile(r"{(\w+)(?::[^}]*)?}")
 #: Request bodies of routes that take a path id AND a body (none today); key: (METHOD, path).
 BODIES: dict[tuple[str, str], Any] = {}
 
-DH_ARM = {
-    "kind": "dh",
-    "name": "two_link",
-    "joints": [
-        {
-            "a": 0.3,
-            "mass": 1.0,
-            "com": [-0.15, 0.0, 0.0],
-            "inertia": [[0.001, 0, 0], [0, 0.008, 0], [0, 0, 0.008]],
-        },
-        {
-            "a": 0.25,
-            "mass": 0.8,
-            "com": [-0.125, 0.0, 0.0],
-            "inertia": [[0.001, 0, 0], [0, 0.005, 0], [0, 0, 0.005]],
-        },
-    ],
-}
+DH_ARM = dh_spec()
 
 
 @dataclass
