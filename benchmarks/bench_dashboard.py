@@ -7,7 +7,8 @@ N it reports p50 / p95 (ms) over ``--repeat`` requests of:
 
 - ``page 1``: the jobs page's request (``/dashboard/jobs?limit=50``, newest first, with total);
 - ``page 1 + options``: what opening the page costs (the filters' choices and page 1);
-- ``keyset page 200``: a page deep in the list by ``cursor`` (10^4 jobs in);
+- ``keyset page 200``: a page deep in the list by ``cursor`` (10^4 jobs in), newest first and
+  (``sort best``) by best value;
 - ``status filter``, ``kind filter``, ``search``, ``sort by best``: filtered / sorted pages;
 - ``GET /jobs``: the API's plain listing (offset paging);
 - ``Python filter``: the obvious alternative — read every job of the key, label, filter, sort
@@ -61,7 +62,8 @@ def fill(ctx: Any, key_id: str, n: int, start: int) -> None:
             )  # fmt: skip
             done = [
                 {"jid": job_id, "st": STATUSES[i % len(STATUSES)], "g": 50,
-                 "best": [(i * 7919) % 1000 / 10], "at": base + timedelta(minutes=i),
+                 "best": [(i * 7919) % 1000 / 10], "bv": (i * 7919) % 1000 / 10,
+                 "at": base + timedelta(minutes=i),
                  "fin": base + timedelta(minutes=i + 1)}
                 for i, job_id in zip(range(lo, hi), ids, strict=True)
                 if STATUSES[i % len(STATUSES)] is not JobStatus.QUEUED
@@ -71,6 +73,7 @@ def fill(ctx: Any, key_id: str, n: int, start: int) -> None:
                 .where(JOBS.c.id == bindparam("jid"))
                 .values(status=bindparam("st"), progress_generation=bindparam("g"),
                         best_objective=bindparam("best", type_=JOBS.c.best_objective.type),
+                        best_value=bindparam("bv"),
                         created_at=bindparam("at", type_=JOBS.c.created_at.type),
                         finished_at=bindparam("fin", type_=JOBS.c.finished_at.type))
             )  # fmt: skip
@@ -92,6 +95,14 @@ def python_filter(ctx: Any, key_id: str, kind: str) -> list[Any]:
     chosen = [j for j in jobs if labels[j.id]["problem"]["kind"] == kind]
     chosen.sort(key=lambda j: j.created_at, reverse=True)
     return chosen[:50]
+
+
+def deep_cursor(get: Callable[[str], Any], page: str, depth: int) -> str | None:
+    """The cursor of page ``depth + 1`` of ``page``, walked page by page."""
+    cursor = None
+    for _ in range(depth):
+        cursor = get(page + (f"&cursor={cursor}" if cursor else ""))["next_cursor"]
+    return cursor
 
 
 def timed(fn: Callable[[], Any], repeat: int) -> tuple[float, float]:
@@ -148,16 +159,14 @@ def bench(
             deep = get(
                 f"/api/v1/dashboard/jobs?limit=50&offset={min(n - 50, 10_000)}&sort=finished"
             )
-            cursor = None
-            for _ in range(min(200, n // 50 - 1)):
-                cursor = get(
-                    "/api/v1/dashboard/jobs?limit=50" + (f"&cursor={cursor}" if cursor else "")
-                )["next_cursor"]
             page = "/api/v1/dashboard/jobs?limit=50"
+            cursor = deep_cursor(get, page, min(200, n // 50 - 1))
+            best_cursor = deep_cursor(get, f"{page}&sort=best&order=asc", min(200, n // 50 - 1))
             paths = {
                 "page 1": [page],
                 "page 1 + options": ["/api/v1/dashboard/options", page],
                 "keyset page 200": [f"{page}&cursor={cursor}"],
+                "keyset page 200 (sort best)": [f"{page}&sort=best&order=asc&cursor={best_cursor}"],
                 "offset page (sort finished)": [f"{page}&offset={deep['offset']}&sort=finished"],
                 "status filter": [f"{page}&status=failed"],
                 "kind filter": [f"{page}&kind=quadruped_gait"],

@@ -88,7 +88,9 @@ class JobRowPage(BaseModel):
     limit: int
     offset: int
     next_cursor: str | None = Field(
-        default=None, description="Pass as `cursor` for the next page (newest-first order)."
+        default=None,
+        description="Pass as `cursor` for the next page (same sort and order); null on the "
+        "last page.",
     )
 
 

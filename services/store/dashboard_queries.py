@@ -4,9 +4,9 @@ labels, hypervolumes and sweep members; the hypervolume reference point of a run
 The jobs page must stay fast at 10^5 jobs per key, so nothing here walks a key's jobs in
 Python. What a listing shows of a job's spec (study kind, robot, optimizer, name, seed, tags)
 lives in ``job_labels``, one row per job written once by :func:`sync_labels` (a spec never
-changes after submission), indexed by ``(owner, created_at)`` and ``(owner, kind,
-created_at)``; the jobs table has ``(owner, created_at)``. The default order (newest first)
-pages by keyset (``cursor``), every other order by offset over indexed columns.
+changes after submission). Every sortable column has an index ``(owner, column, created_at,
+id)`` (``services.store.tables``), so every order pages by keyset (``cursor``) in O(page)
+at any depth; ``offset`` still works, in O(offset).
 
 Like ``services.store.repository``: every function takes the ``Session`` first and never
 commits.
@@ -22,19 +22,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any, Literal
 
-from sqlalchemy import (
-    JSON,
-    ColumnElement,
-    Float,
-    and_,
-    cast,
-    func,
-    insert,
-    literal,
-    or_,
-    select,
-    type_coerce,
-)
+from sqlalchemy import ColumnElement, Select, func, insert, literal, select, tuple_
 from sqlalchemy.orm import Session
 
 from services.store.records import JobRecord
@@ -188,8 +176,8 @@ class JobRow:
 
 @dataclass(frozen=True)
 class JobRowPage:
-    """A page of jobs: the rows, how many match, and the keyset cursor of the next page
-    (newest-first order only; None at the end or for other orders)."""
+    """A page of jobs: the rows, how many match, and the keyset cursor of the next page (None
+    on the last page)."""
 
     items: tuple[JobRow, ...]
     total: int
@@ -232,15 +220,10 @@ def _conditions(owner_key_id: str, f: JobFilter, by_labels: bool) -> list[Column
     return c
 
 
-def best_value() -> ColumnElement[Any]:
-    """The first objective of a job's best so far, as a number (NULL before generation 1)."""
-    return cast(type_coerce(JOBS.c.best_objective, JSON)[0].as_float(), Float)
-
-
-def _order(sort: str, descending: bool, by_labels: bool) -> list[ColumnElement[Any]]:
+def _sort_column(sort: str, by_labels: bool) -> ColumnElement[Any]:
+    """The column a sort key orders by (``created``: the table driving the query's own)."""
     created = JOB_LABELS.c.created_at if by_labels else JOBS.c.created_at
-    ident = JOB_LABELS.c.job_id if by_labels else JOBS.c.id
-    column: ColumnElement[Any] = {
+    return {
         "created": created,
         "finished": JOBS.c.finished_at,
         "status": JOBS.c.status,
@@ -248,33 +231,129 @@ def _order(sort: str, descending: bool, by_labels: bool) -> list[ColumnElement[A
         "robot": JOB_LABELS.c.robot,
         "optimizer": JOB_LABELS.c.optimizer,
         "progress": JOBS.c.progress_generation,
-        "best": best_value(),
+        "best": JOBS.c.best_value,
     }[sort]
-    first = column.desc().nulls_last() if descending else column.asc().nulls_last()
-    if sort == "created":  # the index's own order (no NULLS LAST: created_at is never NULL)
-        first = column.desc() if descending else column.asc()
-    return [first, ident.desc() if descending else ident.asc()]
 
 
-def encode_cursor(created_at: datetime, job_id: str) -> str:
-    """The opaque keyset cursor after the job ``(created_at, job_id)``."""
-    raw = json.dumps([created_at.isoformat(), job_id]).encode()
+#: Sort keys whose column can be NULL (a job not finished, no generation yet): NULLs come last
+#: in either direction.
+NULLABLE_SORTS = frozenset({"finished", "best"})
+
+
+def encode_cursor(sort: str, value: Any, created_at: datetime, job_id: str) -> str:
+    """The opaque keyset cursor after the job ``(value, created_at, job_id)`` of a ``sort``
+    order (``value``: the job's sort column; unused for ``created``)."""
+    if isinstance(value, datetime):
+        value = value.isoformat()
+    elif isinstance(value, JobStatus):
+        value = value.value
+    raw = json.dumps([sort, value, created_at.isoformat(), job_id]).encode()
     return base64.urlsafe_b64encode(raw).decode().rstrip("=")
 
 
-def decode_cursor(cursor: str) -> tuple[datetime, str]:
-    """``(created_at, job_id)`` of a cursor; ValueError when it is not one of ours."""
+def decode_cursor(cursor: str, sort: str = "created") -> tuple[Any, datetime, str]:
+    """``(value, created_at, job_id)`` of a cursor of the ``sort`` order; ValueError when it is
+    not one of ours or belongs to another order."""
     try:
         raw = base64.urlsafe_b64decode(cursor + "=" * (-len(cursor) % 4))
-        at, job_id = json.loads(raw)
-        return datetime.fromisoformat(at), str(job_id)
+        of_sort, value, at, job_id = json.loads(raw)
+        created = datetime.fromisoformat(at)
     except (ValueError, TypeError, binascii.Error, json.JSONDecodeError):
         raise ValueError("not a cursor of this listing: use next_cursor of a page") from None
+    if of_sort != sort:
+        raise ValueError(f"cursor of the sort {of_sort!r}, not {sort!r}: start again without it")
+    if value is not None and sort == "finished":
+        try:
+            value = datetime.fromisoformat(str(value))
+        except ValueError:
+            raise ValueError("not a cursor of this listing: use next_cursor of a page") from None
+    try:
+        if sort == "status":
+            value = JobStatus(value)
+        elif sort in ("progress", "best") and value is not None:
+            value = int(value) if sort == "progress" else float(value)
+        elif sort in ("kind", "robot", "optimizer"):
+            value = str(value)
+    except (ValueError, TypeError):
+        raise ValueError("not a cursor of this listing: use next_cursor of a page") from None
+    return value, created, str(job_id)
+
+
+def _row_value(row: Any, sort: str) -> Any:
+    """The sort column's value of a result row (for the next page's cursor)."""
+    if sort == "best":
+        return row["best_value"]
+    return {
+        "created": None,
+        "finished": row["finished_at"],
+        "status": row["status"],
+        "kind": row["kind"],
+        "robot": row["robot"],
+        "optimizer": row["optimizer"],
+        "progress": row["progress_generation"],
+    }[sort]
+
+
+class _Order:
+    """A page order: ``(column, created_at, id)`` all ascending or all descending (``created``:
+    ``(created_at, id)``), NULLs of a nullable column last. Each column has an index ending
+    in ``(created_at, id)``, so a keyset page is an index range scan at any depth."""
+
+    def __init__(self, sort: str, descending: bool, by_labels: bool) -> None:
+        self.sort = sort
+        self.descending = descending
+        self.column = _sort_column(sort, by_labels)
+        self.created = JOB_LABELS.c.created_at if by_labels else JOBS.c.created_at
+        self.ident = JOB_LABELS.c.job_id if by_labels else JOBS.c.id
+        self.nullable = sort in NULLABLE_SORTS
+
+    def keys(self, with_column: bool = True) -> list[ColumnElement[Any]]:
+        cols = [self.created, self.ident]
+        return [self.column, *cols] if with_column and self.sort != "created" else cols
+
+    def order_by(self, with_column: bool = True, nulls_last: bool = False) -> list[Any]:
+        out: list[Any] = []
+        for c in self.keys(with_column):
+            o = c.desc() if self.descending else c.asc()
+            out.append(o.nulls_last() if nulls_last and c is self.column else o)
+        return out
+
+    def after(self, values: list[Any], with_column: bool = True) -> ColumnElement[bool]:
+        """Rows after ``values`` (the keys of the previous page's last row) in this order."""
+        cols = self.keys(with_column)
+        typed = [literal(v, type_=c.type) for c, v in zip(cols, values, strict=True)]
+        left, right = tuple_(*cols), tuple_(*typed)
+        return left < right if self.descending else left > right
 
 
 #: A listing counts its matches up to this many (then says "more than"): an exact count of
 #: 10^5 rows would cost more than the page itself.
 COUNT_CAP = 10_000
+
+
+def _keyset_rows(
+    session: Session, stmt: Select[Any], order: _Order, limit: int, cursor: str | None
+) -> list[Any]:
+    """A page after ``cursor`` (or the first page) by index range scans: for a nullable
+    column, first the rows with a value, then (when the page is not full) those without."""
+    value, at, last = decode_cursor(cursor, order.sort) if cursor else (None, None, None)
+    if not order.nullable:
+        keys = [at, last] if order.sort == "created" else [value, at, last]
+        q = stmt if cursor is None else stmt.where(order.after(keys))
+        return list(session.execute(q.order_by(*order.order_by()).limit(limit)).mappings())
+    rows: list[Any] = []
+    if cursor is None or value is not None:
+        q = stmt.where(order.column.is_not(None))
+        if cursor is not None:
+            q = q.where(order.after([value, at, last]))
+        rows = list(session.execute(q.order_by(*order.order_by()).limit(limit)).mappings())
+    if len(rows) < limit:
+        q = stmt.where(order.column.is_(None))
+        if cursor is not None and value is None:
+            q = q.where(order.after([at, last], with_column=False))
+        q = q.order_by(*order.order_by(with_column=False)).limit(limit - len(rows))
+        rows += list(session.execute(q).mappings())
+    return rows
 
 
 def list_job_rows(
@@ -293,10 +372,11 @@ def list_job_rows(
 
     Filters on labels (kind, optimizer, robot, tag, search) walk the labels' indexes; status
     and sweep filters alone walk the jobs table's ``(owner, status, created_at)`` and
-    ``(owner, created_at)`` indexes. ``cursor`` (newest-first order only) continues after the
-    last row of the previous page in O(limit) whatever the depth; ``offset`` works with every
-    order. ``total`` counts at most ``COUNT_CAP + 1`` matches (``count`` False: not at all, -1;
-    the export streams pages without it)."""
+    ``(owner, created_at)`` indexes. Every order is ``(sort column, created_at, id)``, NULLs
+    last; ``cursor`` (a page's ``next_cursor``, same sort and order) continues after the last
+    row of the previous page in O(limit) whatever the depth; ``offset`` pages by counting
+    (O(offset)). ``total`` counts at most ``COUNT_CAP + 1`` matches (``count`` False: not at
+    all, -1; the export streams pages without it)."""
     if sort not in SORT_KEYS:
         raise ValueError(f"sort: expected one of {', '.join(SORT_KEYS)}, got {sort!r}")
     by_labels = _label_filtered(f) or sort in ("kind", "robot", "optimizer")
@@ -308,14 +388,6 @@ def list_job_rows(
     )
     labels = [JOB_LABELS.c[c] for c in ("name", "kind", "robot", "optimizer", "seed", "tags")]
     stmt = select(JOBS, *labels).select_from(joined).where(*conditions)
-    keyset = cursor is not None and sort == "created"
-    if keyset:
-        at, last = decode_cursor(cursor or "")
-        created = JOB_LABELS.c.created_at if by_labels else JOBS.c.created_at
-        ident = JOB_LABELS.c.job_id if by_labels else JOBS.c.id
-        older = or_(created < at, and_(created == at, ident < last))
-        newer = or_(created > at, and_(created == at, ident > last))
-        stmt = stmt.where(older if descending else newer)
     total = -1
     if count:
         mixed = by_labels and bool(f.status or f.sweep_id)  # conditions on both tables
@@ -323,10 +395,14 @@ def list_job_rows(
         matches = select(literal(1)).select_from(source).where(*conditions)
         capped = matches.limit(COUNT_CAP + 1).subquery()
         total = int(session.execute(select(func.count()).select_from(capped)).scalar_one())
-    page = stmt.order_by(*_order(sort, descending, by_labels)).limit(limit)
-    if not keyset:
-        page = page.offset(offset)
-    rows = session.execute(page).mappings().all()
+    order = _Order(sort, descending, by_labels)
+    if cursor is not None or offset == 0:  # one more row than asked: is there a next page?
+        rows = _keyset_rows(session, stmt, order, limit + 1, cursor)
+        offset = 0
+    else:
+        page = stmt.order_by(*order.order_by(nulls_last=True)).limit(limit + 1).offset(offset)
+        rows = list(session.execute(page).mappings())
+    more, rows = len(rows) > limit, rows[:limit]
     items = tuple(
         JobRow(
             job=_job_record(r),
@@ -340,9 +416,9 @@ def list_job_rows(
         for r in rows
     )
     next_cursor = None
-    if sort == "created" and len(items) == limit:
-        last_row = items[-1].job
-        next_cursor = encode_cursor(last_row.created_at, last_row.id)
+    if more:
+        last = rows[-1]
+        next_cursor = encode_cursor(sort, _row_value(last, sort), last["created_at"], last["id"])
     return JobRowPage(items, total, limit, offset, next_cursor)
 
 
@@ -359,7 +435,7 @@ __all__ = [
     "JobFilter",
     "JobRow",
     "JobRowPage",
-    "best_value",
+    "NULLABLE_SORTS",
     "decode_cursor",
     "encode_cursor",
     "label_values",

@@ -193,6 +193,16 @@ def _finite_or_none(value: float | None) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def first_objective(best: Any) -> float | None:
+    """``jobs.best_value``: the number the jobs page sorts "best" by — ``best`` itself or its
+    first element (a job's best objective(s) so far, JSON), None when missing or not finite."""
+    if isinstance(best, list | tuple):
+        best = best[0] if best else None
+    if isinstance(best, bool) or not isinstance(best, int | float):
+        return None
+    return _finite_or_none(best)
+
+
 def _check_owner(session: Session, job_id: str, worker_id: str) -> None:
     """Raise LeaseLostError unless ``worker_id`` holds the lease of the running job."""
     owned = session.execute(select(JOBS.c.id).where(_owned_by(job_id, worker_id))).first()
@@ -228,7 +238,11 @@ def record_generation(
     advance = (
         update(JOBS)
         .where(_owned_by(job_id, worker_id), JOBS.c.progress_generation <= generation)
-        .values(progress_generation=generation, best_objective=best)
+        .values(
+            progress_generation=generation,
+            best_objective=best,
+            best_value=first_objective(best),
+        )
     )
     if rowcount(session.execute(advance)) == 0:
         _check_owner(session, job_id, worker_id)  # owner, but a later generation is recorded
@@ -274,7 +288,11 @@ def record_generations(
         advance = (
             update(JOBS)
             .where(owned, JOBS.c.progress_generation <= int(last.generation))
-            .values(progress_generation=int(last.generation), best_objective=last.best)
+            .values(
+                progress_generation=int(last.generation),
+                best_objective=last.best,
+                best_value=first_objective(last.best),
+            )
             .returning(JOBS.c.cancel_requested)
         )
         flag = session.execute(advance).first()

@@ -187,10 +187,13 @@ class Job(Base):
         Index(None, "owner_key_id"),
         Index(None, "sweep_id"),
         Index(None, "status", "dispatch_due_at"),
-        # the dashboard's jobs page (services.store.dashboard_queries)
+        # the dashboard's jobs page (services.store.dashboard_queries): newest first, and one
+        # index per sortable column ending in the page order's tie-break (created_at, id)
         Index(None, "owner_key_id", "created_at"),
-        Index(None, "owner_key_id", "status", "created_at"),
-        Index(None, "owner_key_id", "finished_at"),
+        Index(None, "owner_key_id", "status", "created_at", "id"),
+        Index(None, "owner_key_id", "finished_at", "created_at", "id"),
+        Index(None, "owner_key_id", "progress_generation", "created_at", "id"),
+        Index(None, "owner_key_id", "best_value", "created_at", "id"),
     )
 
     id: Mapped[str] = mapped_column(String(ID_LENGTH), primary_key=True, default=new_id)
@@ -210,6 +213,9 @@ class Job(Base):
     progress_generation: Mapped[int] = mapped_column(Integer, default=0)
     total_generations: Mapped[int] = mapped_column(Integer, default=0)
     best_objective: Mapped[Any | None] = mapped_column(JSONValue())
+    # The first objective of ``best_objective`` as a number (NULL before generation 1 or when
+    # not finite), written with it: what the jobs page sorts by "best".
+    best_value: Mapped[float | None] = mapped_column(Float)
 
     lease_owner: Mapped[str | None] = mapped_column(String(200))
     lease_expires_at: Mapped[datetime | None]
@@ -384,7 +390,9 @@ class JobLabel(Base):
     __tablename__ = "job_labels"
     __table_args__ = (
         Index(None, "owner_key_id", "created_at"),
-        Index(None, "owner_key_id", "kind", "created_at"),
+        Index(None, "owner_key_id", "kind", "created_at", "job_id"),
+        Index(None, "owner_key_id", "robot", "created_at", "job_id"),
+        Index(None, "owner_key_id", "optimizer", "created_at", "job_id"),
     )
 
     job_id: Mapped[str] = mapped_column(String(ID_LENGTH), _job_fk(), primary_key=True)

@@ -95,13 +95,17 @@ def dashboard_jobs(
     offset: Annotated[int, Query(ge=0, le=MAX_OFFSET)] = 0,
     cursor: Annotated[
         str | None,
-        Query(max_length=200, description="`next_cursor` of the previous page (sort=created)."),
+        Query(
+            max_length=300,
+            description="`next_cursor` of the previous page (same sort and order).",
+        ),
     ] = None,
 ) -> JobRowPage:
     """Study kind, robot, optimizer, status, progress, best value so far, times and tags of
     each job. Everything is filtered, sorted and paged in the database (indexed), so a page
-    costs about the same at 10^5 jobs as at 10; with the default order pass `cursor` (the
-    previous page's `next_cursor`) to page by keyset instead of `offset`."""
+    costs about the same at 10^5 jobs as at 10. Every order is the column, then newest first
+    (NULLs last); pass `cursor` (the previous page's `next_cursor`) to page by keyset at any
+    depth, or `offset` (which costs more the deeper it goes)."""
     sync_labels(ctx, key.id)
     with ctx.read() as session:
         try:

@@ -21,7 +21,7 @@ function stateFromHash(hash) {
 }
 
 export async function render(main, _param, hash) {
-  const st = { ...stateFromHash(hash), offset: 0, cursors: [null], page: 0 };
+  const st = { ...stateFromHash(hash), cursors: [null], page: 0 };
   const options = await api("/dashboard/options");
   let timer = null;
   let alive = true;
@@ -42,7 +42,7 @@ export async function render(main, _param, hash) {
     robot: robot.value.trim(), status: statusBoxes.map((l) => l.firstChild).filter((c) => c.checked).map((c) => c.value),
     sweep_id: st.sweep_id });
 
-  function restart() { st.offset = 0; st.cursors = [null]; st.page = 0; load(); }
+  function restart() { st.cursors = [null]; st.page = 0; load(); }
   for (const el of [kind, optimizer, ...statusBoxes.map((l) => l.firstChild)]) el.addEventListener("change", restart);
   let debounce = null;
   for (const el of [search, robot]) el.addEventListener("input", () => { clearTimeout(debounce); debounce = setTimeout(restart, 300); });
@@ -62,15 +62,13 @@ export async function render(main, _param, hash) {
   async function load() {
     clearTimeout(timer);
     const f = filters();
-    const keyset = st.sort === "created";
-    const params = { ...f, sort: st.sort, order: st.order, limit: st.limit,
-      cursor: keyset ? st.cursors[st.page] : null, offset: keyset ? 0 : st.offset };
+    const params = { ...f, sort: st.sort, order: st.order, limit: st.limit, cursor: st.cursors[st.page] };
     let page;
     try { page = await api(`/dashboard/jobs${query(params)}`); } catch (err) {
       info.textContent = err.message; return;
     }
     if (!alive) return;
-    const start = keyset ? st.page * st.limit : st.offset;
+    const start = st.page * st.limit;
     const total = page.total > 10000 ? "more than 10,000" : page.total.toLocaleString();
     info.textContent = page.total ? `${start + 1}–${start + page.items.length} of ${total}` : "no jobs";
     drawTable(page.items);
@@ -123,15 +121,11 @@ export async function render(main, _param, hash) {
 
   function drawPager(page, start) {
     clear(pager);
-    const keyset = st.sort === "created";
     const prev = h("button.secondary", { disabled: start === 0, on: { click: () => {
-      if (keyset) st.page -= 1; else st.offset = Math.max(0, st.offset - st.limit);
-      load(); } } }, "← newer");
-    const more = keyset ? page.next_cursor !== null : start + page.items.length < page.total;
-    const next = h("button.secondary", { disabled: !more, on: { click: () => {
-      if (keyset) { st.cursors[st.page + 1] = page.next_cursor; st.page += 1; } else st.offset += st.limit;
-      load(); } } }, "older →");
-    pager.append(prev, next, h("span.muted", keyset ? `page ${st.page + 1}` : `offset ${st.offset}`));
+      st.page -= 1; load(); } } }, "← previous");
+    const next = h("button.secondary", { disabled: page.next_cursor === null, on: { click: () => {
+      st.cursors[st.page + 1] = page.next_cursor; st.page += 1; load(); } } }, "next →");
+    pager.append(prev, next, h("span.muted", `page ${st.page + 1}`));
   }
 
   await load();
