@@ -126,6 +126,31 @@ class BaselineMark(BaseModel):
     metrics: dict[str, Any]
 
 
+class PaperMark(BaseModel):
+    """The paper's own solution (its start or its optimum) on the front plot, in the order of
+    ``objectives``; only when the paper printed a value for every objective."""
+
+    label: str = Field(description="paper's start | paper's optimum")
+    objectives: list[float]
+
+
+class PaperValue(BaseModel):
+    """The paper's own number for one metric (our unit): at its start and at its optimum."""
+
+    symbol: str = Field(description="The paper's name for it ('' when it is ours).")
+    start: float | None
+    optimum: float | None
+    note: str = ""
+
+
+class PaperOut(BaseModel):
+    """The seed paper's own numbers for this job (``examples/papers/paper_numbers.yaml``)."""
+
+    source: str
+    marks: list[PaperMark]
+    metrics: dict[str, PaperValue]
+
+
 class FrontOut(BaseModel):
     """Everything the front plot and table of one job need."""
 
@@ -138,6 +163,9 @@ class FrontOut(BaseModel):
     best_index: int | None = Field(description="The point closest to the reported optimum.")
     baselines: list[BaselineMark]
     hypervolume_ref: list[float] | None
+    paper: PaperOut | None = Field(
+        default=None, description="The seed paper's own numbers, when the job is one of its cases."
+    )
 
 
 class MotionSignal(BaseModel):

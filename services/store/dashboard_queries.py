@@ -308,7 +308,7 @@ class _Order:
         self.nullable = sort in NULLABLE_SORTS
 
     def keys(self, with_column: bool = True) -> list[ColumnElement[Any]]:
-        cols = [self.created, self.ident]
+        cols: list[ColumnElement[Any]] = [self.created, self.ident]
         return [self.column, *cols] if with_column and self.sort != "created" else cols
 
     def order_by(self, with_column: bool = True, nulls_last: bool = False) -> list[Any]:

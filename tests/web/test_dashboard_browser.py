@@ -100,6 +100,8 @@ def test_jobs_front_point_replay_and_csv(
     page.wait_for_selector("#earned table tbody tr")
     assert page.locator("#earned table tbody tr").count() == 2
     assert "initial population" in page.locator("#earned thead").inner_text()
+    # the paper's own numbers beside ours (seed 004's time law, examples/papers)
+    assert "paper" in page.locator("#metrics-table thead").inner_text()
 
     # click a front point on the plot: its row is selected, its joints plotted, its recording
     # fetched from /pareto/{k}/recording and handed to the viewer

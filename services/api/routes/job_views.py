@@ -15,6 +15,9 @@ from services.api.dashboard_schemas import (
     FrontOut,
     FrontPointOut,
     MotionOut,
+    PaperMark,
+    PaperOut,
+    PaperValue,
     Quantity,
     quantities,
 )
@@ -144,7 +147,39 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
         best_index=best_index,
         baselines=marks,
         hypervolume_ref=ref,
+        paper=paper_numbers(spec, names, kind),
     )
+
+
+def paper_numbers(spec: Any, names: list[str], kind: str | None) -> PaperOut | None:
+    """The paper's numbers for the job's case: per metric its start and optimum, and on the
+    front its start / optimum where it printed every objective (none when an objective is
+    maximised: the front holds what the optimiser minimises)."""
+    from legcore.problems.metric_names import metric_name
+    from services.paper_numbers import paper_entry
+
+    entry = paper_entry(spec if isinstance(spec, dict) else None)
+    if entry is None:
+        return None
+    rows = {r.metric: r for r in entry.rows}
+    metrics = {
+        r.metric: PaperValue(
+            symbol=r.paper or metric_name(r.metric, kind).paper,
+            start=r.start,
+            optimum=r.optimum,
+            note=" ".join(r.note.split()),
+        )
+        for r in entry.rows
+        if r.start is not None or r.optimum is not None
+    }
+    senses = [q.sense for q in quantities(names, kind)]
+    marks = []
+    for label, pick in (("paper's start", "start"), ("paper's optimum", "optimum")):
+        values = [getattr(rows[n], pick) if n in rows else None for n in names]
+        numbers = [float(v) for v in values if v is not None]
+        if names and "max" not in senses and len(numbers) == len(names):
+            marks.append(PaperMark(label=label, objectives=numbers))
+    return PaperOut(source=entry.source, marks=marks, metrics=metrics)
 
 
 @router.get(

@@ -136,6 +136,10 @@ def test_front_has_named_objectives_baselines_and_hypervolume(env: dict[str, Any
     assert front["points"] and front["best_index"] is not None
     assert {b["name"] for b in front["baselines"]} == {"seed", "seed_max_V"}
     assert all(len(b["objectives"]) == 2 for b in front["baselines"])
+    # the paper's own numbers: seed 004 printed only the time of its law (not plottable alone)
+    paper = front["paper"]
+    assert paper["source"].startswith("Sandoval") and paper["marks"] == []
+    assert paper["metrics"]["time"]["start"] == pytest.approx(17.2832)
     ref = front["hypervolume_ref"]
     assert ref is not None and len(ref) == 2
     gens = client.get(f"{API}/jobs/{env['job']}/generations", headers=alice).json()["items"]
@@ -288,3 +292,16 @@ def test_job_tags_are_listed_and_filter_the_jobs(env: dict[str, Any]) -> None:
     bad = {**SPEC, "tags": ["has space"]}
     r = c.post(f"{API}/jobs", json=bad, headers=alice)
     assert r.status_code == 422 and "tags" in r.text
+
+
+def test_paper_solution_is_marked_where_every_objective_was_printed() -> None:
+    """Seed 002's paper solution a has all three objectives: one mark on the 3-D front."""
+    from services.api.routes.job_views import paper_numbers
+
+    names = ["f1_beta1", "f2_beta5", "f3_perimeter"]
+    paper = paper_numbers({"problem": {"kind": "hexapod_workspace"}}, names, "hexapod_workspace")
+    assert paper is not None and paper.source.startswith("Domínguez")
+    assert [(m.label, m.objectives) for m in paper.marks] == [
+        ("paper's optimum", [0.0001, 0.0009, 0.000764])
+    ]
+    assert paper_numbers({"problem": {"kind": "nothing"}}, names, None) is None

@@ -1,5 +1,5 @@
-// Plotly wrappers: the Pareto front (2-D, or 3-D for three objectives) with baselines and the
-// optimum marked, convergence (best per objective and hypervolume per generation), joint
+// Plotly wrappers: the Pareto front (2-D, or 3-D for three objectives) with baselines, the
+// paper's own values and the optimum marked, convergence (best per objective and hypervolume per generation), joint
 // signals of one solution, and fronts of several sweep cells overlaid.
 import { axis } from "./ui.js";
 
@@ -40,6 +40,13 @@ export function frontPlot(el, front, onPick, selected = null) {
       name: "baselines (study reference)", text: marks.map((b) => b.name), textposition: "top center",
       customdata: marks.map((b) => ["baseline", b.name]),
       marker: { size: three ? 6 : 11, symbol: three ? "square" : "diamond", color: COLORS[2] } });
+  }
+  const paper = (front.paper && front.paper.marks) || [];
+  if (paper.length) {
+    traces.push({ ...base, ...xyz((j) => paper.map((p) => p.objectives[j])), mode: three ? "markers" : "markers+text",
+      name: `the paper's values (${front.paper.source})`, text: paper.map((p) => p.label), textposition: "bottom center",
+      hoverinfo: "text+x+y" + (three ? "+z" : ""),
+      marker: { size: three ? 7 : 13, symbol: three ? "cross" : "x", color: "#9467bd", line: { color: "#333", width: 1 } } });
   }
   if (selected && selected.kind === "point") {
     const s = pts.find((p) => p.index === selected.index);

@@ -121,18 +121,30 @@ export async function render(main, jobId) {
       tr.addEventListener("click", () => pick({ kind: "baseline", name: b.name }));
       body.append(tr);
     }
+    for (const p of (front.paper && front.paper.marks) || []) {
+      body.append(h("tr.paper", { dataset: { paper: p.label } }, h("td", h("em", `${p.label} (${front.paper.source})`)),
+        p.objectives.map((v) => h("td.num", num(v))), front.variables.slice(0, nx).map(() => h("td"))));
+    }
     frontTable.append(body);
   }
 
   function drawMetrics(result) {
     const labels = Object.fromEntries(front.metrics.map((q) => [q.name, q]));
+    const paper = front.paper ? front.paper.metrics : null;
+    const paperCell = (k) => {
+      const pv = paper && paper[k];
+      if (!pv) return h("td.num.muted", "—");
+      const text = `${pv.start === null ? "" : `${num(pv.start)} → `}${num(pv.optimum)}`;
+      return h("td.num", { title: [pv.symbol && `paper: ${pv.symbol}`, pv.note].filter(Boolean).join(" — ") }, text);
+    };
     const rows = Object.entries(result.metrics || {}).map(([k, v]) => {
       const q = labels[k] || { label: k, unit: "" };
       return h("tr", h("td", q.label), h("td.mono.muted", k), h("td.num", num(v)), h("td", q.unit),
-        front.baselines.map((b) => h("td.num", num(b.metrics[k]))));
+        paper ? paperCell(k) : null, front.baselines.map((b) => h("td.num", num(b.metrics[k]))));
     });
     fill(metrics, earnedBlock(result), h("h2", "Metrics of the reported optimum"),
       h("table#metrics-table", h("thead", h("tr", h("th", "metric"), h("th", "name"), h("th.num", "optimum"), h("th", "unit"),
+        paper ? h("th.num", { title: front.paper.source }, "paper: start → optimum") : null,
         front.baselines.map((b) => h("th.num", `baseline ${b.name}`)))), h("tbody", rows)));
   }
 
