@@ -165,17 +165,28 @@ def _points_kernel(
             out[s, n + 1, 2] = pz + P20 * lx + P21 * ly + P22 * lz
 
 
-def chain_points(robot: Robot, q: ArrayLike, tool: bool = False) -> FloatArray:
+def chain_points(
+    robot: Robot, q: ArrayLike, tool: bool = False, offsets: ArrayLike | None = None
+) -> FloatArray:
     """World origins (..., M, 3) (m) of the base, link frames 1..n and, with ``tool``, the tool.
 
     ``q`` (..., n) rad (m for prismatic joints). M = n + 1 (+ 1 with ``tool``); row 0 is the
     base (DH frame 0 / the URDF root), row i the origin of ``robot.link_frames[i-1]``, the last
     row with ``tool`` the tool point. Equals ``frames(robot, q)[..., :3, 3]`` followed by
     ``fk(robot, q)[..., :3, 3]``; the result is C-contiguous.
+
+    ``offsets`` (n, 3) m: row i is instead the point fixed in link frame i at these link-frame
+    coordinates (e.g. the links' centres of mass): ``F_i[:3, :3] @ offsets[i-1] + F_i[:3, 3]``
+    for ``F = frames(robot, q)``, still without the 4×4 poses.
     """
     qf, batch = _as_q(robot, q)
     c = robot.chain
-    _, link_p, base = _link_placements(robot)
+    link_R, link_p, base = _link_placements(robot)
+    if offsets is not None:
+        off = np.asarray(offsets, dtype=float)
+        if off.shape != (robot.nq, 3):
+            raise ValueError(f"offsets: expected shape ({robot.nq}, 3), got {off.shape}")
+        link_p = np.ascontiguousarray(link_p + np.einsum("lij,lj->li", link_R, off))
     Q0, Qc, Qs = _rotation_terms(robot)
     n = robot.nq
     out = np.empty((qf.shape[0], n + 1 + int(tool), 3))

@@ -66,11 +66,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from legcore.chain_points import chain_points
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import integrate
 from legcore.gaits import QUADRUPED_WALK, Gait, leg_phase, stability_margin, support_polygon
 from legcore.joint_metrics import joint_metrics
-from legcore.kinematics import frames
 from legcore.problems.quadruped_gait_cycle import (
     SwingShape,
     foot_cycle,
@@ -183,9 +183,7 @@ class QuadrupedGaitProblem(StudyProblem):
             share.append(load_share(u[..., j], beta, np.maximum(beta - 0.75, 0.0)))
             ok_all.append(np.concatenate((ok_k, ok_e), 1))
             # link COMs (leg base frame) -> body frame, mass-weighted
-            F = frames(rb, q)  # (B, M, n+1, 4, 4)
-            c_link = np.einsum("...lij,lj->...li", F[..., 1:, :3, :3], g.com_link)
-            c_link = c_link + F[..., 1:, :3, 3]
+            c_link = chain_points(rb, q, offsets=g.com_link)[..., 1:, :]  # (B, M, n, 3)
             com_num = com_num + np.einsum("...li,l->...i", leg.foot_in_body(c_link), rb.chain.mass)
             q_l.append(qk)
             qd_l.append(qd)

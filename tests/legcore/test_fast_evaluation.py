@@ -94,6 +94,15 @@ def test_chain_points_equal_the_frames_translations(label: str, robot: Robot) ->
     np.testing.assert_allclose(P, ref, atol=1e-12, rtol=0)
     np.testing.assert_array_equal(chain_points(robot, q), P[..., :-1, :])
     np.testing.assert_array_equal(chain_points(robot, q[0, 0]), P[0, 0, :-1])
+    # points fixed in the link frames (the quadruped study's link COMs)
+    off = rng.uniform(-0.1, 0.1, (robot.nq, 3))
+    F = frames(robot, q)
+    want = np.einsum("...lij,lj->...li", F[..., 1:, :3, :3], off) + F[..., 1:, :3, 3]
+    got = chain_points(robot, q, offsets=off)
+    np.testing.assert_allclose(got[..., 1:, :], want, atol=1e-12, rtol=0)
+    np.testing.assert_array_equal(got[..., 0, :], P[..., 0, :])
+    with pytest.raises(ValueError, match="offsets"):
+        chain_points(robot, q, offsets=off[:-1])
 
 
 def test_chain_clearance_equals_the_slab_reference_over_several_boxes() -> None:
