@@ -43,7 +43,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from legcore.robots.model import Robot
 
-__all__ = ["inverse_dynamics", "inverse_dynamics_reference", "joint_friction"]
+__all__ = [
+    "COULOMB_DEAD_BAND",
+    "inverse_dynamics",
+    "inverse_dynamics_reference",
+    "joint_friction",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -74,11 +79,17 @@ def _as_motion(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> tup
     return arrays[0], arrays[1], arrays[2]
 
 
+#: Joint speeds (rad/s or m/s) at or below which a joint is at rest for Coulomb friction.
+COULOMB_DEAD_BAND = 1e-9
+
+
 def joint_friction(robot: Robot, qd: ArrayLike) -> FloatArray:
     """Joint-side friction torque (N·m) of the motors+gears at joint speeds ``qd`` (..., n) rad/s.
 
     ``τ_f = G²·B·q̇ + |G|·Tc(q̇)`` with ``Tc = Tc_pos`` for q̇ > 0, ``Tc_neg`` (≤ 0) for q̇ < 0 and 0
-    at rest — the torque the actuator must *add* to overcome friction (roboticstoolbox
+    at rest, i.e. for ``|q̇| ≤ COULOMB_DEAD_BAND`` (1e-9 rad/s: a joint that stops or reverses
+    has a speed of round-off size there, whose sign would switch the full Coulomb torque on
+    and off) — the torque the actuator must *add* to overcome friction (roboticstoolbox
     ``Link.friction`` with the opposite sign; see ``robots/data/puma560.json`` "conventions").
     ``B`` (N·m·s/rad) and ``Tc`` (N·m) are motor-side values from ``robot.motors``; joints without
     a motor have zero friction.
@@ -87,7 +98,8 @@ def joint_friction(robot: Robot, qd: ArrayLike) -> FloatArray:
     if qd.ndim == 0 or qd.shape[-1] != robot.nq:
         raise ValueError(f"qd: last axis must have length nq = {robot.nq}, got shape {qd.shape}")
     m = robot.motors
-    coulomb = np.where(qd > 0.0, m.Tc_pos, np.where(qd < 0.0, m.Tc_neg, 0.0))
+    band = COULOMB_DEAD_BAND
+    coulomb = np.where(qd > band, m.Tc_pos, np.where(qd < -band, m.Tc_neg, 0.0))
     return m.G**2 * m.B * qd + np.abs(m.G) * coulomb
 
 

@@ -9,7 +9,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from legcore.dynamics import inverse_dynamics, inverse_dynamics_reference, joint_friction
+from legcore.dynamics import (
+    COULOMB_DEAD_BAND,
+    inverse_dynamics,
+    inverse_dynamics_reference,
+    joint_friction,
+)
 from legcore.robots import build_robot, catalog
 
 # ---------------------------------------------------------------------------------------------
@@ -201,6 +206,19 @@ def test_friction_by_hand_puma_joint1():
     # a robot without motors has no friction
     leg = catalog.get("calderon_leg")
     np.testing.assert_array_equal(joint_friction(leg, np.ones((2, 3))), 0.0)
+
+
+def test_coulomb_friction_is_off_for_round_off_speeds():
+    """A joint that stops has a speed of round-off size: no Coulomb torque switching on and
+    off with its sign (only the viscous part), while any real motion gets it in full."""
+    robot = catalog.get("puma560")
+    qd = np.zeros((4, 6))
+    qd[:, 0] = [1e-15, -3e-12, COULOMB_DEAD_BAND * 2, -COULOMB_DEAD_BAND * 2]
+    tf = joint_friction(robot, qd)[:, 0]
+    viscous = 5.8018217679508 * qd[:, 0]
+    np.testing.assert_allclose(tf[:2], viscous[:2], rtol=1e-12, atol=0)
+    assert tf[2] == pytest.approx(viscous[2] + 24.7313845, rel=1e-12)
+    assert tf[3] == pytest.approx(viscous[3] - 27.2358285, rel=1e-12)
 
 
 def test_armature_counted_once():
