@@ -2,8 +2,9 @@
 
 All objectives are minimised. ``F`` is always an ``(n, m)`` array of objective vectors.
 
-- ``non_dominated_sort`` ranks points into fronts (0 = non-dominated) with a vectorised dominance
-  matrix; with ``cv`` it applies Deb's constrained domination (feasible first, then by violation).
+- ``non_dominated_sort`` ranks points into fronts (0 = non-dominated): Deb's fast sort, compiled
+  (``legcore.pareto_kernels``); with ``cv`` it applies Deb's constrained domination (feasible
+  first, then by violation). ``crowding_distance`` is compiled too.
 - ``hypervolume`` is exact (pymoo's indicator, computed by moocore) and returns the value together
   with the reference point it was measured against, so a number is never reported without it.
 - ``igd`` is the mean distance from each point of a reference front to its nearest point in ``F``.
@@ -18,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial.distance import cdist
+
+from legcore.pareto_kernels import crowding_kernel, pareto_ranks_kernel
 
 __all__ = [
     "covers",
@@ -105,17 +108,9 @@ def non_dominated_sort(F: ArrayLike, cv: ArrayLike | None = None) -> np.ndarray:
     idx = np.flatnonzero(feasible)
     n_fronts = 0
     if idx.size:
-        D = dominance_matrix(F[idx])
-        count = D.sum(axis=0)  # number of points dominating each point
-        remaining = np.ones(idx.size, dtype=bool)
-        r = 0
-        while remaining.any():
-            front = remaining & (count == 0)
-            ranks[idx[front]] = r
-            remaining &= ~front
-            count = count - D[front].sum(axis=0)
-            r += 1
-        n_fronts = r
+        sub = np.empty(idx.size, dtype=np.int64)
+        n_fronts = pareto_ranks_kernel(np.ascontiguousarray(F[idx]), sub)
+        ranks[idx] = sub
     if cv is not None and not feasible.all():
         inf_idx = np.flatnonzero(~feasible)
         _, dense = np.unique(cv[inf_idx], return_inverse=True)
@@ -165,22 +160,7 @@ def crowding_distance(F: ArrayLike, ranks: ArrayLike | None = None) -> np.ndarra
     cd = np.zeros(n)
     if n == 0:
         return cd
-    for k in range(m):
-        order = np.lexsort((F[:, k], ranks))
-        r, f = ranks[order], F[order, k]
-        first = np.r_[True, r[1:] != r[:-1]]
-        last = np.r_[r[1:] != r[:-1], True]
-        # objective range of each point's front
-        start = np.maximum.accumulate(np.where(first, np.arange(n), 0))
-        end_idx = np.where(last, np.arange(n), n)
-        end = np.minimum.accumulate(end_idx[::-1])[::-1]
-        span = f[end] - f[start]
-        prev = np.r_[f[0], f[:-1]]
-        nxt = np.r_[f[1:], f[-1]]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            gap = np.where(span > 0, (nxt - prev) / np.where(span > 0, span, 1.0), 0.0)
-        gap = np.where(first | last, np.inf, gap)
-        cd[order] += gap
+    crowding_kernel(np.ascontiguousarray(F), np.ascontiguousarray(ranks, dtype=np.int64), cd)
     return cd
 
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+import numba
 import numpy as np
 
 from legcore.metrics import crowding_distance, non_dominated_sort
@@ -35,6 +36,40 @@ from legcore.optimizers.params import check_float, check_int, check_optional_flo
 __all__ = ["NSGA2"]
 
 _MAX_ROUNDS = 10
+
+
+@numba.njit(cache=True, nogil=True)
+def _tournament_kernel(
+    perm: np.ndarray, F: np.ndarray, cv: np.ndarray, crowd: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """Winner of each pair ``(perm[2k], perm[2k+1])``: the lower violation if either violates,
+    else the Pareto-dominating one, else the larger crowding distance (ties: the first)."""
+    m = F.shape[1]
+    for k in range(out.shape[0]):
+        a = perm[2 * k]
+        b = perm[2 * k + 1]
+        if cv[a] > 0 or cv[b] > 0:
+            out[k] = a if cv[a] <= cv[b] else b
+            continue
+        a_le = True  # F[a] <= F[b] everywhere
+        b_le = True
+        a_lt = False  # F[a] < F[b] somewhere
+        b_lt = False
+        for j in range(m):
+            fa = F[a, j]
+            fb = F[b, j]
+            if fa > fb:
+                a_le = False
+                b_lt = True
+            elif fa < fb:
+                b_le = False
+                a_lt = True
+            elif not (fa == fb):  # NaN: neither side is <= the other
+                a_le = False
+                b_le = False
+        a_dom = a_le and a_lt
+        b_dom = b_le and b_lt
+        out[k] = a if a_dom or (not b_dom and crowd[a] >= crowd[b]) else b
 
 
 class NSGA2(Algorithm):
@@ -75,6 +110,7 @@ class NSGA2(Algorithm):
         self._cv = np.zeros(0)
         self._rank = np.zeros(0, dtype=np.int64)
         self._crowd = np.zeros(0)
+        self._front_cache: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def population(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -88,20 +124,16 @@ class NSGA2(Algorithm):
         self._cv = np.zeros(0)
         self._rank = np.zeros(0, dtype=np.int64)
         self._crowd = np.zeros(0)
+        self._front_cache = None
 
     def _tournament(self, n: int) -> np.ndarray:
         """``n`` binary-tournament winners; contestants paired from random permutations."""
         size = self._X.shape[0]
         n_perm = -(-2 * n // size)
         perm = np.concatenate([self._rng.permutation(size) for _ in range(n_perm)])[: 2 * n]
-        a, b = perm[0::2], perm[1::2]
-        Fa, Fb = self._F[a], self._F[b]
-        a_dom = np.all(Fa <= Fb, axis=1) & np.any(Fa < Fb, axis=1)
-        b_dom = np.all(Fb <= Fa, axis=1) & np.any(Fb < Fa, axis=1)
-        ca, cb = self._cv[a], self._cv[b]
-        by_pareto = a_dom | (~b_dom & (self._crowd[a] >= self._crowd[b]))
-        a_wins = np.where((ca > 0) | (cb > 0), ca <= cb, by_pareto)
-        return np.where(a_wins, a, b)
+        winners = np.empty(n, dtype=np.int64)
+        _tournament_kernel(perm, self._F, self._cv, self._crowd, winners)
+        return winners
 
     def _offspring(self, n: int) -> np.ndarray:
         p = self.problem
@@ -154,15 +186,19 @@ class NSGA2(Algorithm):
             rank = rank[keep]
             crowd = crowding_distance(F, rank)
         self._X, self._F, self._cv, self._rank, self._crowd = X, F, cv, rank, crowd
+        self._front_cache = None
 
     def _front(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._front_cache is not None:  # best() and front() both ask once per generation
+            return self._front_cache
         sel = (self._rank == 0) & (self._cv <= 0.0)
         X, F = self._X[sel], self._F[sel]
-        if F.shape[0] == 0:
-            return X, F
-        _, first = np.unique(F, axis=0, return_index=True)
-        first = np.sort(first)
-        return X[first], F[first]
+        if F.shape[0] > 0:
+            _, first = np.unique(F, axis=0, return_index=True)
+            first = np.sort(first)
+            X, F = X[first], F[first]
+        self._front_cache = (X, F)
+        return X, F
 
     def _get_state(self) -> dict[str, Any]:
         return {"X": self._X, "F": self._F, "cv": self._cv, "rank": self._rank,
@@ -175,3 +211,4 @@ class NSGA2(Algorithm):
         self._cv = np.asarray(data["cv"], dtype=float).copy()
         self._rank = np.asarray(data["rank"], dtype=np.int64).copy()
         self._crowd = np.asarray(data["crowd"], dtype=float).copy()
+        self._front_cache = None
