@@ -130,14 +130,16 @@ def _stats(runs: list[tuple[float, np.ndarray]], pf: np.ndarray, ref: np.ndarray
     return {"t": times, "igd": igds, "hv": hvs}
 
 
-def compare_case(key: str, seeds: list[int], gens: int) -> list[str]:
+def compare_case(
+    key: str, seeds: list[int], gens: int, kinds: tuple[str, ...] = ("moead", "nsga2")
+) -> list[str]:
     case = CASES[key]
     problem = pymoo_problem(case)
     ours_problem = FromPymoo(problem)
     pf = reference_front(case, problem)
     ref = 1.1 * pf.max(axis=0)
     rows = []
-    for kind in ("moead", "nsga2"):
+    for kind in kinds:
         ours = _stats([run_ours(kind, ours_problem, case.pop, gens, s) for s in seeds], pf, ref)
         theirs = None
         if not (kind == "moead" and problem.n_ieq_constr):
@@ -186,6 +188,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     ap.add_argument("--gens", type=int, default=200)
     ap.add_argument("--skip-ga", action="store_true")
+    ap.add_argument("--algorithms", nargs="+", default=["moead", "nsga2"],
+                    choices=["moead", "nsga2"])
     ap.add_argument("--no-header", action="store_true", help="rows only (to append runs)")
     args = ap.parse_args()
     print(f"{len(args.seeds)} seeds, {args.gens} generations, nproc {os.cpu_count()}, "
@@ -197,7 +201,7 @@ def main() -> None:
               "Mann–Whitney p (IGD) |")
         print("|---|---|---|---|---|---|---|---|")
     for key in args.problems:
-        for row in compare_case(key, args.seeds, args.gens):
+        for row in compare_case(key, args.seeds, args.gens, tuple(args.algorithms)):
             print(row, flush=True)
     if not args.skip_ga:
         ga_at_seed_setting(args.seeds)
