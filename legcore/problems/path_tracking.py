@@ -95,10 +95,15 @@ def _cumulative_trapezoid(y: FloatArray, t: FloatArray) -> FloatArray:
     return np.concatenate([[0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t))])
 
 
-def _per_joint(value: float | tuple[float, ...] | None, robot: Robot, name: str) -> FloatArray:
-    """A per-joint limit (n,) from one value, one per joint, or None (inf)."""
+def _per_joint(
+    value: float | tuple[float, ...] | str | None, robot: Robot, name: str
+) -> FloatArray:
+    """A per-joint acceleration limit (n,) from one value, one per joint, None (inf) or
+    ``"robot"``: the robot's ``qdd_max``, :data:`DEFAULT_QDD_MAX` where it has none."""
     if value is None:
         return np.full(robot.nq, np.inf)
+    if value == "robot":
+        return np.where(np.isfinite(robot.qdd_max), robot.qdd_max, DEFAULT_QDD_MAX)
     if isinstance(value, tuple):
         if len(value) != robot.nq:
             raise ValueError(f"{name}: {len(value)} values for the {robot.nq} joints of "

@@ -121,9 +121,10 @@ class Params(StudyParams):
       speed limits can hold somewhere on it: faster is infeasible).
     - ``T_max``: optional cycle-time cap (s), a constraint.
     - ``qdd_max``: joint acceleration limits (rad/s²), one for every joint or one per joint;
-      default :data:`DEFAULT_QDD_MAX` (assumed); null: no acceleration limit (then a time
-      optimum has millisecond ramps — physically meaningless). Speed and torque limits are
-      the robot's.
+      ``"robot"`` (default): the robot's own (``qdd_max`` of its DH joints, or of its URDF
+      spec by joint name), :data:`DEFAULT_QDD_MAX` (assumed) for joints without one; null: no
+      acceleration limit (then a time optimum has millisecond ramps — physically
+      meaningless). Speed and torque limits are the robot's.
     - ``n_samples``: time samples per candidate trajectory (evaluation and decoding).
     """
 
@@ -145,7 +146,7 @@ class Params(StudyParams):
     V_bounds: tuple[Finite, Finite] = (0.01, 1.0)
     ramp_bounds: tuple[Finite, Finite] = (0.005, 5.0)
     T_max: Finite | None = Field(default=None, gt=0.0)
-    qdd_max: Positive | tuple[Positive, ...] | None = DEFAULT_QDD_MAX
+    qdd_max: Positive | tuple[Positive, ...] | Literal["robot"] | None = "robot"
     n_samples: int = Field(default=400, ge=20, le=20_000)
 
     @model_validator(mode="after")

@@ -141,6 +141,7 @@ def _build_dh(spec: DHRobotSpec) -> Robot:
         q_min=np.array([j.q_min for j in spec.joints]),
         q_max=np.array([j.q_max for j in spec.joints]),
         qd_max=np.array([j.qd_max for j in spec.joints]),
+        qdd_max=np.array([np.inf if j.qdd_max is None else j.qdd_max for j in spec.joints]),
         tau_max=np.array([j.tau_max if j.tau_max is not None else np.inf for j in spec.joints]),
         home=home,
         motors=motor_arrays([j.motor for j in spec.joints]),

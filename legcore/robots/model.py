@@ -78,8 +78,9 @@ class Robot:
     Attributes: ``name``; ``spec`` (the validated specification it was built from); ``model``
     (``pinocchio.Model``, treat as read-only); ``tool_frame`` (frame id of the tool);
     ``link_frames`` (frame ids of the link frames 1..n, for drawing and per-link quantities);
-    joint limits ``q_min``, ``q_max`` (rad or m), ``qd_max`` (rad/s), ``tau_max`` (N·m, inf if
-    unknown); ``home`` configuration; ``motors``; ``chain`` (fast-path arrays); ``ik_family``
+    joint limits ``q_min``, ``q_max`` (rad or m), ``qd_max`` (rad/s), ``qdd_max`` (rad/s², inf
+    if not given: URDF has no acceleration limits, the spec may add them), ``tau_max`` (N·m,
+    inf if unknown); ``home`` configuration; ``motors``; ``chain`` (fast-path arrays); ``ik_family``
     (name of the closed-form IK that applies, or None for damped least squares).
     """
 
@@ -91,6 +92,7 @@ class Robot:
     q_min: FloatArray
     q_max: FloatArray
     qd_max: FloatArray
+    qdd_max: FloatArray
     tau_max: FloatArray
     home: FloatArray
     motors: MotorArrays

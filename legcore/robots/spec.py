@@ -143,6 +143,7 @@ class DHJoint(_Strict):
     q_min: FiniteFloat = -math.pi
     q_max: FiniteFloat = math.pi
     qd_max: FiniteFloat = 10.0
+    qdd_max: FiniteFloat | None = None
     tau_max: FiniteFloat | None = None
     mass: FiniteFloat = 0.0
     com: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
@@ -163,7 +164,7 @@ class DHJoint(_Strict):
             raise ValueError(f"must be > 0, got {v}")
         return v
 
-    @field_validator("tau_max")
+    @field_validator("tau_max", "qdd_max")
     @classmethod
     def _torque_positive(cls, v: float | None) -> float | None:
         if v is not None and v <= 0.0:
@@ -276,8 +277,17 @@ class URDFRobotSpec(_Strict):
     legs: dict[LegName, LegSpec] | Literal["auto"] | None = None
     leg: LegName | None = None
     motors: dict[str, MotorSpec] = Field(default_factory=dict)
+    qdd_max: dict[URDFName, FiniteFloat] = Field(default_factory=dict, max_length=500)
     gravity: Vec3 = Field(default_factory=lambda: [0.0, 0.0, -9.81])
     description: str = Field(default="", max_length=4000)
+
+    @field_validator("qdd_max")
+    @classmethod
+    def _accelerations_positive(cls, v: dict[str, float]) -> dict[str, float]:
+        bad = {k: x for k, x in v.items() if not x > 0.0}
+        if bad:
+            raise ValueError(f"acceleration limits must be > 0 rad/s² (m/s²), got {bad}")
+        return v
 
     @field_validator("legs")
     @classmethod

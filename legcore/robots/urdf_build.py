@@ -307,6 +307,7 @@ def serial_robot(
         q_min=q_min,
         q_max=q_max,
         qd_max=qd_max,
+        qdd_max=np.array([spec.qdd_max.get(jn, np.inf) for jn in joint_names], dtype=float),
         tau_max=tau,
         home=np.clip(np.zeros(n), q_min, q_max),
         motors=motor_arrays(motors),
@@ -336,6 +337,9 @@ def build_urdf(spec: URDFRobotSpec) -> Robot | LeggedRobot:
     unknown = sorted(set(spec.motors) - set(parsed.movable))
     if unknown:
         raise ValueError(f"motors: unknown joint name(s) {unknown}")
+    unknown = sorted(set(spec.qdd_max) - set(parsed.movable))
+    if unknown:
+        raise ValueError(f"qdd_max: unknown joint name(s) {unknown} (give moving joints' names)")
     values = lock_values(spec, parsed)
     xml = lock_xml(parsed.xml, values)
     model = _full_model(xml)

@@ -256,6 +256,9 @@ class JointOut(BaseModel):
     lower: float | None
     upper: float | None
     velocity: float | None
+    acceleration: float | None = Field(
+        default=None, description="rad/s² (m/s²); null when the robot gives none."
+    )
     effort: float | None
     link_mass_kg: float | None
 

@@ -121,6 +121,21 @@ def test_urdf_matches_equivalent_dh():
     assert r_urdf.q_max[1] == pytest.approx(2 * math.pi)  # continuous -> ±2π
 
 
+def test_acceleration_limits_from_the_spec():
+    """URDF has no acceleration limits: the spec gives them by joint name (inf where not);
+    a DH joint carries its own; unknown names and non-positive values are refused."""
+    spec = {"kind": "urdf", "name": "u", "urdf": URDF_2R, "tool_frame": "tip"}
+    r = build_robot({**spec, "qdd_max": {"j2": 4.5}})
+    np.testing.assert_array_equal(r.qdd_max, [np.inf, 4.5])
+    assert np.all(np.isinf(build_robot(spec).qdd_max))
+    with pytest.raises(ValueError, match="qdd_max: unknown joint"):
+        build_robot({**spec, "qdd_max": {"nope": 1.0}})
+    with pytest.raises(ValueError, match="qdd_max"):
+        build_robot({**spec, "qdd_max": {"j1": 0.0}})
+    d = build_robot({"kind": "dh", "name": "d", "joints": [{"a": 0.3, "qdd_max": 2.0}, {"a": 0.2}]})
+    np.testing.assert_array_equal(d.qdd_max, [2.0, np.inf])
+
+
 def test_puma_armature_and_motors():
     robot = catalog.get("puma560")
     ref = catalog.get("puma560").spec

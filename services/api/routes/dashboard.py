@@ -161,6 +161,7 @@ def _joints(robot: Robot, leg: str | None = None) -> list[JointOut]:
             lower=_finite(robot.q_min[i]),
             upper=_finite(robot.q_max[i]),
             velocity=_finite(robot.qd_max[i]),
+            acceleration=_finite(robot.qdd_max[i]),
             effort=_finite(robot.tau_max[i]),
             link_mass_kg=_finite(robot.chain.mass[i]) if i < robot.chain.n else None,
         )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -59,6 +60,17 @@ def test_defaults_are_the_seed(problem):
     assert get_study("path_tracking") is STUDY
     assert STUDY.default_robot == "articulated_5dof" and STUDY.seed_paper == "004"
     assert problem.variable_names == ("V_1", "V_2", "V_3", "V_4", "t_a", "t_d", "t_b")
+
+
+def test_acceleration_limits_default_to_the_robots(arm):
+    """qdd_max "robot" (the default): the robot's own limits, 5 rad/s² (assumed) where it
+    gives none — the seed arm gives none, so the seed's 5 rad/s² everywhere."""
+    assert Params().qdd_max == "robot"
+    np.testing.assert_array_equal(build(arm, Params()).qdd_max, 5.0)
+    limited = dataclasses.replace(arm, qdd_max=np.array([1.0, 2.0, np.inf, np.inf, 3.0]))
+    np.testing.assert_array_equal(build(limited, Params()).qdd_max, [1.0, 2.0, 5.0, 5.0, 3.0])
+    np.testing.assert_array_equal(build(limited, Params(qdd_max=7.0)).qdd_max, 7.0)
+    assert np.all(np.isinf(build(limited, Params(qdd_max=None)).qdd_max))
 
 
 def test_speed_box_cuts_off_only_infeasible_speeds(problem):
