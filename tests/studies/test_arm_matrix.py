@@ -72,6 +72,8 @@ def test_path_tracking_on_real_arms(name: str, preset: SpecOf) -> None:
     problem = prepare(spec).problem
     assert isinstance(problem, PathTrackingProblem)
     robot = problem.robot
+    if name == "panda":  # the robot's own limits (MoveIt's), given in its spec by joint name
+        np.testing.assert_array_equal(problem.qdd_max, [3.75, 1.875, 2.5, 3.125, 3.75, 5, 5])
     res = legcore.run(spec)
     for sol in (res.best, res.baselines["seed"]):
         assert sol.metrics["feasible"] == 1.0
