@@ -22,7 +22,9 @@ FK + Jacobian evaluations (≈ µs), far below a Python loop's per-sample overhe
 
 from __future__ import annotations
 
+import functools
 import math
+import weakref
 
 import numba
 import numpy as np
@@ -40,11 +42,12 @@ from legcore.ik.newton import (
     PRM_TOL_R,
     PRM_W,
     newton,
+    track,
     workspace,
 )
-from legcore.ik.sample_kinematics import interp_target
+from legcore.ik.sample_kinematics import interp_target, z_chain
 from legcore.ik.targets import TASK_ROWS, IKSolution, parse_targets
-from legcore.robots.model import Robot
+from legcore.robots.model import Chain, Robot
 
 __all__ = ["halton_seeds", "solve_numeric", "solve_parsed"]
 
@@ -73,7 +76,6 @@ def _paths_kernel(
     use_rest: bool,
     R: FloatArray,
     p: FloatArray,
-    axis: FloatArray,
     prismatic: BoolArray,
     tool_R: FloatArray,
     tool_p: FloatArray,
@@ -118,10 +120,16 @@ def _paths_kernel(
                     q[j] = q_prev[j]
                 else:
                     q[j] = q_init[b, j]
-            conv, it, ep, er = newton(
-                q, tpk, tRk, task, lo, hi, rest, use_rest, R, p, axis, prismatic,
-                tool_R, tool_p, prm, max_iter, ws,
-            )
+            if warm and have_prev:  # a predictor: one Newton step, checked (newton if not)
+                conv, it, ep, er = track(
+                    q, tpk, tRk, task, lo, hi, rest, use_rest, R, p, prismatic, tool_R,
+                    tool_p, prm, max_iter, ws,
+                )
+            else:
+                conv, it, ep, er = newton(
+                    q, tpk, tRk, task, lo, hi, rest, use_rest, R, p, prismatic, tool_R, tool_p,
+                    prm, max_iter, ws,
+                )
             total = it
             jumped = conv and have_prev and _max_jump(q, q_prev) > flip_tol
             if warm and have_prev and (not conv or jumped):
@@ -133,7 +141,7 @@ def _paths_kernel(
                     for s in range(1, n_sub + 1):
                         interp_target(task, p_prev, R_prev, tpk, tRk, s / n_sub, p_i, R_i)
                         c2, it2, ep2, er2 = newton(
-                            q_sub, p_i, R_i, task, lo, hi, rest, use_rest, R, p, axis,
+                            q_sub, p_i, R_i, task, lo, hi, rest, use_rest, R, p,
                             prismatic, tool_R, tool_p, prm, max_iter, ws,
                         )
                         total += it2
@@ -153,7 +161,7 @@ def _paths_kernel(
                     for j in range(n):
                         q[j] = seeds[s, j]
                     conv, it, ep, er = newton(
-                        q, tpk, tRk, task, lo, hi, rest, use_rest, R, p, axis, prismatic,
+                        q, tpk, tRk, task, lo, hi, rest, use_rest, R, p, prismatic,
                         tool_R, tool_p, prm, max_iter, ws,
                     )
                     total += it
@@ -198,16 +206,44 @@ def halton_seeds(count: int, lo: FloatArray, hi: FloatArray, center: FloatArray)
     a = np.maximum(lo, center - math.pi)
     b = np.minimum(hi, center + math.pi)
     out = np.empty((count, n))
-    for i in range(count):
-        for j in range(n):
-            f, r, k = 1.0, 0.0, i + 1
-            base = primes[j % len(primes)]
-            while k > 0:
-                f /= base
-                r += f * (k % base)
-                k //= base
-            out[i, j] = a[j] + r * (b[j] - a[j])
+    for j in range(n):  # the radical inverse of 1..count in base primes[j], all i at once
+        base = primes[j % len(primes)]
+        k = np.arange(1, count + 1)
+        f = np.ones(count)
+        r = np.zeros(count)
+        while k.any():  # digit by digit, the same float operations as one i at a time
+            live = k > 0
+            f = np.where(live, f / base, f)
+            r = np.where(live, r + f * (k % base), r)
+            k //= base
+        out[:, j] = a[j] + r * (b[j] - a[j])
     return out
+
+
+@functools.lru_cache(maxsize=64)
+def _restart_seeds(restarts: int, lo: bytes, hi: bytes, rest: bytes) -> FloatArray:
+    """The restart seeds (restarts, n): ``rest``, then :func:`halton_seeds` about it (limits and
+    rest as bytes of float64 arrays; cached — read-only)."""
+    lo_a, hi_a, rest_a = (np.frombuffer(v, dtype=np.float64) for v in (lo, hi, rest))
+    seeds = np.concatenate(
+        [rest_a[None], halton_seeds(max(restarts - 1, 0), lo_a, hi_a, rest_a)]
+    )[:restarts]
+    seeds = np.ascontiguousarray(seeds)
+    seeds.flags.writeable = False
+    return seeds
+
+
+_Z_CHAINS: weakref.WeakKeyDictionary[Chain, tuple[FloatArray, ...]] = weakref.WeakKeyDictionary()
+
+
+def _z_chain(robot: Robot) -> tuple[FloatArray, ...]:
+    """:func:`~legcore.ik.sample_kinematics.z_chain` of the robot's chain (cached per chain)."""
+    c = robot.chain
+    z = _Z_CHAINS.get(c)
+    if z is None:
+        z = z_chain(c.R, c.p, c.axis, c.tool_R, c.tool_p)
+        _Z_CHAINS[c] = z
+    return z
 
 
 def _config(robot: Robot, value: ArrayLike | None, default: FloatArray, name: str) -> FloatArray:
@@ -314,10 +350,11 @@ def solve_parsed(
     prm[PRM_LAM0], prm[PRM_LAM_MAX] = 1e-3 * w, 1e6 * w
     prm[PRM_NULL_GAIN], prm[PRM_NULL_TOL] = null_gain, null_tol
     prm[PRM_MAX_STEP], prm[PRM_NEAR] = max_step, 1e-3 * w
-    seeds = np.concatenate(
-        [rest_a[None], halton_seeds(max(restarts - 1, 0), robot.q_min, robot.q_max, rest_a)]
-    )[:restarts]
-    c = robot.chain
+    seeds = _restart_seeds(
+        int(restarts),
+        *(np.asarray(v, dtype=np.float64).tobytes() for v in (robot.q_min, robot.q_max, rest_a)),
+    )
+    zR, zp, z_tool_R, z_tool_p = _z_chain(robot)
     q_out = np.empty((P, K, n))
     ok = np.zeros((P, K), dtype=bool)
     iters = np.zeros((P, K), dtype=np.int64)
@@ -334,10 +371,10 @@ def solve_parsed(
         robot.q_max,
         rest_a,
         n > m,
-        c.R, c.p, c.axis, c.prismatic, c.tool_R, c.tool_p,
+        zR, zp, robot.chain.prismatic, z_tool_R, z_tool_p,
         prm,
         int(max_iter),
-        np.ascontiguousarray(seeds),
+        seeds,
         float(flip_tol),
         int(max_substeps),
         q_out, ok, iters, flip, ep, er,

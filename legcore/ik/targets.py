@@ -15,9 +15,11 @@ its last axis is the path (samples in order) and the axes before it index indepe
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -83,14 +85,12 @@ def parse_targets(task: str, targets: ArrayLike) -> tuple[FloatArray, FloatArray
     if not np.all(np.isfinite(flat)):
         raise ValueError("targets: must be finite")
     N = flat.shape[0]
-    Rt = np.broadcast_to(np.eye(3), (N, 3, 3)).copy()
     if is_pose:
         p = flat[:, :3, 3].copy()
         if task == "pose":
-            Rt = flat[:, :3, :3].copy()
-            dev = np.abs(Rt @ np.swapaxes(Rt, -1, -2) - np.eye(3)).max(initial=0.0)
-            det = np.sum(Rt[:, :, 0] * np.cross(Rt[:, :, 1], Rt[:, :, 2]), axis=-1)
-            if dev > 1e-6 or np.any(det < 0.0):
+            Rt = np.ascontiguousarray(flat[:, :3, :3])
+            dev, det_min = _rotation_defect(Rt)
+            if not (dev <= 1e-6 and det_min >= 0.0):
                 raise ValueError("targets: the 3×3 blocks of the poses must be rotations")
             return p, Rt, batch
         a = flat[:, :3, 2]
@@ -98,14 +98,34 @@ def parse_targets(task: str, targets: ArrayLike) -> tuple[FloatArray, FloatArray
         p = flat[:, :3].copy()
         a = flat[:, 3:]
     else:
-        return flat.copy(), Rt, batch
+        return flat.copy(), np.broadcast_to(np.eye(3), (N, 3, 3)).copy(), batch
     if task == "position":
-        return p, Rt, batch
+        return p, np.broadcast_to(np.eye(3), (N, 3, 3)).copy(), batch
     norm = np.linalg.norm(a, axis=-1)
     if np.any(norm < 1e-12):
         raise ValueError("targets: the tool axis must be a non-zero vector")
     Rt = _frame_with_z(a / norm[:, None])
     return p, Rt, batch
+
+
+@numba.njit(cache=True, nogil=True)
+def _rotation_defect(Rt: FloatArray) -> tuple[float, float]:  # pragma: no cover - compiled
+    """(max |R Rᵀ − I| over the element, smallest det R) of rotations ``Rt`` (N, 3, 3)."""
+    dev = 0.0
+    det_min = math.inf
+    for k in range(Rt.shape[0]):
+        for a in range(3):
+            for b in range(a, 3):
+                s = Rt[k, a, 0] * Rt[k, b, 0] + Rt[k, a, 1] * Rt[k, b, 1]
+                s += Rt[k, a, 2] * Rt[k, b, 2]
+                dev = max(dev, abs(s - 1.0) if a == b else abs(s))
+        d = (
+            Rt[k, 0, 0] * (Rt[k, 1, 1] * Rt[k, 2, 2] - Rt[k, 2, 1] * Rt[k, 1, 2])
+            - Rt[k, 1, 0] * (Rt[k, 0, 1] * Rt[k, 2, 2] - Rt[k, 2, 1] * Rt[k, 0, 2])
+            + Rt[k, 2, 0] * (Rt[k, 0, 1] * Rt[k, 1, 2] - Rt[k, 1, 1] * Rt[k, 0, 2])
+        )
+        det_min = min(det_min, d)
+    return dev, det_min
 
 
 def _frame_with_z(z: FloatArray) -> FloatArray:

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from legcore.ik import IKSolution, solve, solve_numeric
-from legcore.ik.sample_kinematics import fk_jac_one
+from legcore.ik.sample_kinematics import fk_jac_one, fk_z, jac_z, z_chain
 from legcore.kinematics import fk, fk_jacobian, jacobian, log3, manipulability
 from legcore.robots import Robot, build_robot, catalog
 
@@ -138,6 +138,87 @@ def test_per_sample_kinematics_equals_the_batched_kernel(ur5: Robot, panda: Robo
             fk_jac_one(q[s], c.R, c.p, c.axis, c.prismatic, c.tool_R, c.tool_p, Rw, pw, T, J)
             np.testing.assert_allclose(T, T_ref[s], atol=1e-14)
             np.testing.assert_allclose(J, J_ref[s], atol=1e-14)
+
+
+def test_z_aligned_chain_has_the_same_kinematics(ur5: Robot, panda: Robot) -> None:
+    # the solver's chain (every joint turning about its frame's z axis): same FK and Jacobian,
+    # also for axes along −z and in general directions (a random chain)
+    rng = np.random.default_rng(20)
+    n = 6
+    axes = rng.normal(size=(n, 3))
+    axes[1] = [0.0, 0.0, -1.0]
+    axes[2] = [0.0, 1.0, 0.0]
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    rots = np.stack([np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(n + 1)])
+    rots *= np.sign(np.linalg.det(rots))[:, None, None]
+    prismatic = np.array([False, False, True, False, False, False])
+    puma = catalog.get("puma560")
+    assert isinstance(puma, Robot)
+    chains = [(robot.chain.R, robot.chain.p, robot.chain.axis, robot.chain.prismatic,
+               robot.chain.tool_R, robot.chain.tool_p)
+              for robot in (ur5, panda, scara(), puma)]
+    chains.append((rots[:n], rng.normal(size=(n, 3)), axes, prismatic, rots[n], rng.normal(size=3)))
+    for R, p, axis, pris, tool_R, tool_p in chains:
+        m = R.shape[0]
+        zR, zp, ztR, ztp = z_chain(R, p, axis, tool_R, tool_p)
+        Rw, pw, T, J = np.empty((m, 3, 3)), np.empty((m, 3)), np.empty((4, 4)), np.empty((6, m))
+        T_z, J_z = np.empty((4, 4)), np.empty((6, m))
+        for q in rng.uniform(-3.0, 3.0, (20, m)):
+            fk_jac_one(q, R, p, axis, pris, tool_R, tool_p, Rw, pw, T, J)
+            fk_z(q, zR, zp, pris, ztR, ztp, Rw, pw, T_z)
+            jac_z(Rw, pw, T_z, pris, J_z)
+            np.testing.assert_allclose(T_z, T, atol=1e-13)
+            np.testing.assert_allclose(J_z, J, atol=1e-13)
+
+
+def _pinocchio_dls(robot: Robot, T: np.ndarray, q0: np.ndarray) -> np.ndarray:
+    """Reference: a per-sample Python loop of Pinocchio damped least squares (as in
+    ``benchmarks/bench_ik.py``), warm-started from the previous solution."""
+    import pinocchio as pin
+
+    model, data, fid = robot.model, robot.data(), robot.tool_frame
+    q = np.array(q0, dtype=float)
+    out = np.empty((T.shape[0], robot.nq))
+    e = np.empty(6)
+    for k in range(T.shape[0]):
+        for _ in range(100):
+            pin.framesForwardKinematics(model, data, q)
+            M = data.oMf[fid]
+            e[:3] = T[k, :3, 3] - M.translation
+            e[3:] = pin.log3(T[k, :3, :3] @ M.rotation.T)
+            if np.abs(e).max() <= 1e-12:
+                break
+            rf = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+            J = pin.computeFrameJacobian(model, data, q, fid, rf)
+            q = q + J.T @ np.linalg.solve(J @ J.T + 1e-18 * np.eye(6), e)
+        out[k] = q
+    return out
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_fast_path_step_equals_the_reference_solvers(name: str, request) -> None:
+    # along a path each sample takes the one-step fast path (newton.track: an LU step, the
+    # check by FK); it must give what the reference gives: for the 6-DOF arm the Pinocchio
+    # DLS loop's solution, for the 7-DOF arm the full newton iteration from the same start
+    robot = request.getfixturevalue(name)
+    center = UR5_AWAY if name == "ur5" else [0.0, -0.5, 0.0, -2.0, 0.0, 1.6, 0.8]
+    q = smooth_path(robot, 400, seed=21, center=center, amp=0.3)
+    T = fk(robot, q)
+    sol = solve(robot, T, "pose", q0=q[0], path=True)
+    assert sol.reachable.all() and not sol.flip.any()
+    assert_on_target(robot, sol, T, "pose")
+    assert (sol.iterations[3:] == 1).mean() > 0.5  # mostly one step per sample: the fast path
+    if name == "ur5":
+        np.testing.assert_allclose(sol.q, _pinocchio_dls(robot, T, q[0]), atol=1e-8)
+        return
+    # each path sample solved alone by the full newton from the path's previous solution
+    alone = solve(robot, T[1:], "pose", q0=sol.q[:-1])
+    assert alone.reachable.all()
+    np.testing.assert_allclose(sol.q[1:], alone.q, atol=1e-6)
+    J = jacobian(robot, sol.q)
+    N = np.eye(7) - np.linalg.pinv(J) @ J
+    pull = np.abs(np.einsum("kij,kj->ki", N, robot.home - sol.q)).max()
+    assert pull <= 1.5e-7  # |N (q_rest − q)| ≤ null_tol (1e-7) up to the pinv's rounding
 
 
 @pytest.mark.parametrize("task", ["position", "axis", "pose"])
