@@ -5,7 +5,8 @@
 with its entity path, its timeline and its numbers. ``services.worker.rerun_writer`` — the only
 module that imports Rerun — logs them one archetype per item; nothing here knows about Rerun.
 
-Entity paths (``docs/recording.md`` has the full table):
+Entity paths (``docs/recording.md`` has the full table). Items are named per joint, frame and
+link here; ``services.worker.rerun_writer`` logs several of them as one entity:
 
 - ``signals/<q|qd|qdd|jerk|tau|power>/<joint>`` — one scalar series per joint on the ``time``
   timeline (s); ``signals/energy/<joint>`` the cumulative ``∫|P_i| dt`` of that joint (J) and
@@ -17,17 +18,27 @@ Entity paths (``docs/recording.md`` has the full table):
   ``.../frames/<k>/link`` — the link drawn as a capsule from frame origin ``k-1`` to frame
   origin ``k``, posed relative to frame ``k`` (static there for DH chains), and
   ``.../frames/<n>/tool_link`` from the last frame's origin to the tool point when they differ;
-  ``world/robot/body`` the body box of a legged robot; ``world/robot/tool`` the moving
-  tool/foot point (serial robots), ``world/robot/<leg>/foot_path`` each leg's foot path
-  (legged); ``world/path`` the motion's tool/foot path (``Motion.tool``). A pose that does not
-  change over the motion is logged once, static.
+  ``world/robot/body`` the body box of a legged robot. A robot drawn without meshes is logged
+  as **one entity** ``world/robot/links``: per sample 3 arrows (x / y / z) per drawn frame —
+  every frame of a serial robot, a legged robot's joint frames between each leg's base and
+  foot frame —, the capsules and the body box posed in the world. A URDF robot with meshes
+  keeps one entity per frame and link.
+- ``world/robot/tool`` the moving tool point (serial robots); ``world/path`` the motion's
+  tool/foot path (``Motion.tool``); ``world/robot/<leg>/foot_path`` each leg's foot path
+  (legged), logged in the ``world/path`` entity (labelled ``path``, ``L1``, …). A pose that
+  does not change over the motion is logged once, static.
 - ``world/scene/<targets|obstacles|support_polygon|...>`` from ``Motion.scene``.
-- ``baselines/<name>/signals/...`` the same signals for each baseline, and
-  ``world/baselines/<name>/path`` its path beside the best one.
+- ``baselines/<name>/signals/...`` the signals of each baseline — by default only ``q`` and
+  ``energy/total`` (:data:`BASELINE_SIGNALS`; ``record_run(baseline_signals=None)`` keeps all)
+  —, logged as one entity per signal for all baselines, ``baselines/signals/<kind>``, when they
+  share their samples; ``world/baselines/<name>/path`` each baseline's path, logged together
+  as ``world/baselines/paths``.
 - ``optimization/best/<objective>`` (best objective per generation), ``optimization/front_size``,
   ``optimization/ideal|nadir/<objective>``, ``optimization/constraint_violation`` on the
-  ``generation`` timeline; ``optimization/front`` the Pareto front (points in objective space)
-  per generation and ``optimization/best_point`` the history's best (knee) point.
+  ``generation`` timeline (the objectives of best / ideal / nadir: one entity each,
+  ``optimization/best`` …, when there are several); ``optimization/front`` the Pareto front
+  (points in objective space) per generation and ``optimization/best_point`` the history's best
+  (knee) point.
 
 Downsampling (display only; the stored result keeps every sample). A motion of ``K`` samples is
 shown with at most ``max_samples`` (default 2000) of them:
@@ -43,10 +54,10 @@ shown with at most ``max_samples`` (default 2000) of them:
 Every series records ``source_samples`` (``K``) and ``n_samples`` (what is logged), so the
 counts are exact and known. The Pareto front per generation is capped the same way (points
 sorted by the first objective, uniform stride) at ``max_front_points``. Size budget: a run's
-estimated file size (:func:`estimate_bytes`) is kept under ``max_bytes`` (16 MB by default)
-by lowering the caps in proportion to the excess — baselines first, then the best motion
-(never below ``MIN_SAMPLES``), then the front — and ``RunRecording.properties`` records the
-caps used.
+estimated file size (:func:`estimate_bytes`, constants measured on rerun-sdk 0.41 files) is
+kept under ``max_bytes`` (16 MB by default) by lowering the caps in proportion to the excess —
+baselines first, then the best motion (never below ``MIN_SAMPLES``), then the front — and
+``RunRecording.properties`` records the caps used.
 
 Fronts per generation: a :class:`~legcore.runner.RunResult` carries only the final front
 (``pareto``) and a per-generation summary (``history``: best, ideal, nadir, front size). Pass
@@ -76,6 +87,7 @@ if TYPE_CHECKING:
     from legcore.runner import RunResult
 
 __all__ = [
+    "BASELINE_SIGNALS",
     "DEFAULT_MAX_BYTES",
     "DEFAULT_MAX_SAMPLES",
     "MAX_MESH_BYTES",
@@ -127,6 +139,13 @@ SIGNALS: tuple[tuple[str, str, str], ...] = (
     ("tau", "N·m", "joint torque"),
     ("power", "W", "joint power"),
 )
+
+#: The signals a baseline is recorded with by default (``record_run(baseline_signals=...)``):
+#: what the default blueprint shows of it — its joint positions (one view for all baselines)
+#: and its total energy (overlaid on the best motion's). Each further signal costs a small
+#: recording ~4 kB per baseline and ~4 kB for its entity (docs/recording.md §3); ``None``
+#: records them all.
+BASELINE_SIGNALS: tuple[str, ...] = ("q", "energy/total")
 
 # colours (RGB 0-255) for the items the writer draws
 C_PATH = (255, 140, 0)
@@ -1102,15 +1121,22 @@ def _optimization_series(result: RunResult, max_samples: int) -> tuple[list[Seri
         idx = minmax_indices(y, max_samples)
         out.append(Series(path, "generation", gen[idx], y[idx], label, "", G))
 
-    best = _history_arrays(history, "best_f", m)
-    for j, part in enumerate(parts):
-        add(f"optimization/best/{part}", best[:, j], f"best {names[j]}")
-    if m > 1:
-        ideal = _history_arrays(history, "ideal", m)
-        nadir = _history_arrays(history, "nadir", m)
+    def add_objectives(kind: str, Y: FloatArray) -> None:
+        """One series per objective; several share their samples and one entity (``group``
+        ``optimization/<kind>``, like the joints of a signal)."""
+        if m == 1:
+            add(f"optimization/{kind}/{parts[0]}", Y[:, 0], f"{kind} {names[0]}")
+            return
+        idx = shared_minmax_indices(Y, max_samples)
         for j, part in enumerate(parts):
-            add(f"optimization/ideal/{part}", ideal[:, j], f"ideal {names[j]}")
-            add(f"optimization/nadir/{part}", nadir[:, j], f"nadir {names[j]}")
+            path, label = f"optimization/{kind}/{part}", f"{kind} {names[j]}"
+            group = f"optimization/{kind}"
+            out.append(Series(path, "generation", gen[idx], Y[idx, j], label, "", G, group))
+
+    add_objectives("best", _history_arrays(history, "best_f", m))
+    if m > 1:
+        add_objectives("ideal", _history_arrays(history, "ideal", m))
+        add_objectives("nadir", _history_arrays(history, "nadir", m))
     add(
         "optimization/front_size",
         np.array([float(h.get("front_size", 0) or 0) for h in history]),
@@ -1166,9 +1192,18 @@ def _front_scale(fronts: Sequence[tuple[int, FloatArray]]) -> float:
     return span if span > 0 else max(1.0, float(np.max(np.abs(A))))
 
 
-#: Estimated bytes per logged row / value / entity, measured on rerun-sdk 0.41 files
-#: (row id + index + data; ~3.2 kB per entity for its chunk headers and static parts).
-_B_SCALAR_ROW, _B_POSE_ROW, _B_ROW, _B_POINT, _B_ENTITY = 24, 44, 28, 12, 3200
+#: Estimated bytes of a ``.rrd`` file (:func:`estimate_bytes`), measured on rerun-sdk 0.41 files
+#: (LZ4-compressed Arrow chunks) of the seed studies and the recording tests' robots:
+#: an entity's chunks (~2.4 kB of schema and header for its temporal chunk, ~1.8 kB for its
+#: static one); per time row its row id and index; per scalar value (float64); per 3-D point
+#: (float32); per sample of a drawn link frame's 3 arrows (vectors, the repeated origin mostly
+#: compressed away) and of a capsule / box posed in the world (translation + quaternion); a
+#: ``Transform3D`` row of its own entity (a URDF robot with meshes).
+_B_ENTITY, _B_ROW, _B_VALUE, _B_POINT = 4200, 14, 8, 12
+_B_AXES, _B_POSE, _B_POSE_ROW = 44, 26, 42
+#: The file's fixed part: the default blueprint (53–73 kB for the seed studies: ~2.7 kB per
+#: chunk, 19–27 chunks), the file header and the recording's properties.
+_B_FIXED = 66_000
 #: Default size budget of a recording (estimated), under the issue's 20 MB.
 DEFAULT_MAX_BYTES = 16_000_000
 #: Display caps are never lowered below this many samples by the size budget.
@@ -1177,26 +1212,64 @@ MIN_SAMPLES = 200
 
 def _series_bytes(series: Sequence[Series]) -> tuple[int, int]:
     """(entities, per-sample bytes) of scalar series: a group is one entity whose rows share
-    their row id and index (8 bytes per joint value)."""
+    their row id and index."""
     groups: dict[str, tuple[int, int]] = {}
     entities = var = 0
     for s in series:
         if s.group is None:
             entities += 1
-            var += _B_SCALAR_ROW * s.n_samples
+            var += (_B_ROW + _B_VALUE) * s.n_samples
         else:
             rows, n = groups.get(s.group, (s.n_samples, 0))
             groups[s.group] = (rows, n + 1)
     entities += len(groups)
-    var += sum(rows * (_B_ROW + 8 * n) for rows, n in groups.values())
+    var += sum(rows * (_B_ROW + _B_VALUE * n) for rows, n in groups.values())
     return entities, var
 
 
+def _robot_bytes(poses: Sequence[PoseTrack]) -> tuple[int, int]:
+    """(entities, per-sample bytes) of a robot's poses as the writer logs them: without meshes
+    one entity ``world/robot/links`` (per sample 3 arrows per drawn moving frame — a legged
+    robot's legs without their base and foot frames —, a world pose per moving link capsule and
+    body box); with meshes one entity per pose."""
+    moving = [p for p in poses if p.t is not None]
+    if not moving:
+        return len(poses), 0
+    if any(p.geometry == "mesh" for p in poses) or not any(p.geometry == "axes" for p in poses):
+        return len(poses), sum(_B_POSE_ROW * p.n_samples for p in moving)
+    ks: dict[str, list[int]] = {}
+    for p in poses:
+        chain, _, k = p.path.rpartition("/frames/")
+        if p.geometry == "axes" and k.isdigit() and not chain.endswith("/robot"):
+            ks.setdefault(chain, []).append(int(k))
+    n = max(p.n_samples for p in moving)
+    fixed_frames = {p.path for p in poses if p.geometry == "axes" and p.t is None}
+    per = _B_ROW
+    for p in poses:
+        chain, _, k = p.path.rpartition("/frames/")
+        if p.geometry == "axes" and p.t is not None:  # a fixed frame's arrows compress away
+            legged = chain in ks
+            per += 0 if legged and int(k) in (min(ks[chain]), max(ks[chain])) else _B_AXES
+        elif p.geometry in ("capsule", "box") and (
+            p.t is not None or p.path.rsplit("/", 1)[0] not in fixed_frames
+        ):  # posed in the world: moves with its frame
+            per += _B_POSE
+    others = [p for p in poses if p.geometry not in ("axes", "capsule", "box")]
+    return 1 + len(others), n * per + sum(
+        _B_POSE_ROW * p.n_samples for p in others if p.t is not None
+    )
+
+
 def _motion_bytes(m: MotionRecording) -> tuple[int, int]:
-    """(fixed, per-sample) estimated bytes of one motion's items."""
+    """(fixed, per-sample) estimated bytes of one motion's items, as the writer logs them (a
+    legged robot's foot paths share the motion's path entity)."""
     n_series, var = _series_bytes(m.series)
-    fixed = _B_ENTITY * (len(m.entity_paths()) - len(m.series) + n_series)
-    var += sum(0 if p.t is None else _B_POSE_ROW * p.n_samples for p in m.poses)
+    n_robot, robot_var = _robot_bytes(m.poses)
+    feet = [p for p in m.polylines if p.path.endswith("/foot_path")]
+    merged = len(feet) if feet and len(m.polylines) > len(feet) else 0
+    others = len(m.points) + len(m.polylines) - merged + len(m.polyline_tracks)
+    fixed = _B_ENTITY * (n_series + n_robot + others + len(m.point_sets) + len(m.boxes))
+    var += robot_var
     var += sum(_B_ROW * p.t.shape[0] + _B_POINT * p.positions[..., 0].size for p in m.points)
     fixed += sum(_B_POINT * p.points.shape[0] for p in m.polylines)
     var += sum(
@@ -1208,19 +1281,56 @@ def _motion_bytes(m: MotionRecording) -> tuple[int, int]:
     return fixed, var
 
 
+def _baselines_bytes(baselines: Sequence[MotionRecording]) -> tuple[int, int]:
+    """(fixed, per-sample) estimated bytes of the baselines as the writer logs them: a signal
+    every baseline has on the same samples is one entity for all of them (one row id and
+    index per sample), their paths one entity ``world/baselines/paths``."""
+    parts = [_motion_bytes(m) for m in baselines]
+    fixed, var = sum(f for f, _ in parts), sum(v for _, v in parts)
+    if len(baselines) < 2:
+        return fixed, var
+    kinds: dict[str, list[Series]] = {}
+    for m in baselines:
+        firsts: dict[str, Series] = {}
+        for s in m.series:
+            firsts.setdefault(s.group or s.path, s)
+        for entity, s in firsts.items():
+            kinds.setdefault(entity.split("/", 2)[-1], []).append(s)
+    for firsts_of_kind in kinds.values():
+        first = firsts_of_kind[0]
+        if len(firsts_of_kind) > 1 and all(
+            s.timeline == first.timeline and np.array_equal(s.index, first.index)
+            for s in firsts_of_kind
+        ):
+            fixed -= _B_ENTITY * (len(firsts_of_kind) - 1)
+            var -= _B_ROW * first.n_samples * (len(firsts_of_kind) - 1)
+    paths = sum(len(m.polylines) for m in baselines)
+    fixed -= _B_ENTITY * max(0, paths - 1)
+    return fixed, var
+
+
 def _front_bytes(f: FrontTrack | None) -> tuple[int, int]:
+    """(fixed, per-sample) of a front track (``dims`` float32 per point)."""
     if f is None:
         return 0, 0
-    return _B_ENTITY + _B_ROW * len(f.points), _B_POINT * sum(p.shape[0] for p in f.points)
+    return _B_ENTITY + _B_ROW * len(f.points), _B_POINT // 3 * f.dims * sum(
+        p.shape[0] for p in f.points
+    )
 
 
 def estimate_bytes(rec: RunRecording) -> int:
-    """Estimated size (bytes) of the ``.rrd`` file of ``rec`` (within ~25 % for rerun 0.41)."""
-    b = sum(_B_ENTITY + _B_SCALAR_ROW * s.n_samples for s in rec.optimization)
-    for m in rec.motions():
-        b += sum(_motion_bytes(m))
+    """Estimated size (bytes) of the ``.rrd`` file of ``rec`` (within ~25 % for rerun 0.41 on
+    the seed studies; less when the data compress well, e.g. identical baselines)."""
+    n_opt, b = _series_bytes(rec.optimization)
+    b += _B_FIXED + _B_ENTITY * n_opt
+    if rec.best is not None:
+        b += sum(_motion_bytes(rec.best))
+    b += sum(_baselines_bytes(list(rec.baselines.values())))
     for f in (rec.front, rec.best_point):
         b += sum(_front_bytes(f))
+    if rec.front is not None and rec.front.points and 2 <= rec.front.dims <= 3:
+        # the final front, the axes and their labels: three static entities
+        b += 3 * _B_ENTITY + _B_POINT // 3 * rec.front.dims * rec.front.points[-1].shape[0]
     return int(b)
 
 
@@ -1233,6 +1343,7 @@ def record_run(
     max_front_points: int | None = None,
     max_bytes: int | None = DEFAULT_MAX_BYTES,
     mesh_roots: MeshRoots = (),
+    baseline_signals: Sequence[str] | None = BASELINE_SIGNALS,
 ) -> RunRecording:
     """Everything to log for a finished job.
 
@@ -1251,6 +1362,10 @@ def record_run(
     (``package://<pkg>/<rel>`` or a relative name, confined by :mod:`legcore.resource_paths`).
     The default, none, opens no file at all — what every robot submitted over the API gets
     (DESIGN §5); a mesh not read becomes a note and its link is drawn as a capsule.
+
+    ``baseline_signals``: the signals kept for each baseline (``"q"``, ``"energy/total"``, any
+    kind of :data:`SIGNALS`, ``"energy"``); default :data:`BASELINE_SIGNALS`, what the
+    blueprint shows; None: all of them, like the best motion.
     """
     notes: list[str] = []
     if robot is None:
@@ -1263,7 +1378,7 @@ def record_run(
     }
     caps = dict(initial)
     best = _record_best(result, robot, caps["best"], mesh_roots)
-    baselines = _record_baselines(result, robot, caps["baselines"])
+    baselines = _record_baselines(result, robot, caps["baselines"], baseline_signals)
     front, best_point = _record_fronts(result, fronts, m, caps["front"], max_samples, notes)
 
     def assemble() -> RunRecording:
@@ -1278,8 +1393,7 @@ def record_run(
         if max_bytes is None or est <= max_bytes:
             break
         if key == "baselines":
-            parts = [_motion_bytes(b) for b in baselines.values()]
-            var = sum(v for _, v in parts)
+            var = _baselines_bytes(list(baselines.values()))[1]
             used = max((s.n_samples for b in baselines.values() for s in b.series), default=0)
         elif key == "best":
             var = _motion_bytes(best)[1] if best is not None else 0
@@ -1295,7 +1409,7 @@ def record_run(
             continue
         caps[key] = new_cap
         if key == "baselines":
-            baselines = _record_baselines(result, robot, new_cap)
+            baselines = _record_baselines(result, robot, new_cap, baseline_signals)
         elif key == "best":
             best = _record_best(result, robot, new_cap, mesh_roots)
         else:
@@ -1332,7 +1446,10 @@ def _record_best(
 
 
 def _record_baselines(
-    result: RunResult, robot: Robot | LeggedRobot | None, cap: int
+    result: RunResult,
+    robot: Robot | LeggedRobot | None,
+    cap: int,
+    signals: Sequence[str] | None = BASELINE_SIGNALS,
 ) -> dict[str, MotionRecording]:
     out: dict[str, MotionRecording] = {}
     names = list((getattr(result, "baselines", None) or {}).keys())
@@ -1351,6 +1468,15 @@ def _record_baselines(
             scene=False,
             path_color=C_BASELINE,
         )
+        if signals is not None:
+            prefix = f"baselines/{part}/signals/"
+            out[name].series[:] = [
+                s
+                for s in out[name].series
+                if any(
+                    (rel := s.path[len(prefix) :]) == k or rel.startswith(k + "/") for k in signals
+                )
+            ]
     return out
 
 

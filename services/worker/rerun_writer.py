@@ -203,6 +203,7 @@ def _with_default_blueprint(blueprint: rrb.Blueprint | None, attach: Callable[[A
         )
     )
     try:
+        bp.set_log_time_enabled(False)  # a blueprint needs no wall clock (~0.3 kB a chunk)
         bp.set_time("blueprint", sequence=0)
         blueprint.to_blueprint()._log_to_stream(bp)
         attach(bp.memory_recording().storage)
@@ -235,10 +236,26 @@ def log_run(stream: rr.RecordingStream, rec: RunRecording) -> None:
             **{k: v for k, v in rec.properties.items() if isinstance(v, str | int | float)}  # type: ignore[arg-type]
         ),
     )
-    for m in rec.motions():
-        _log_motion(stream, m)
-    for s in rec.optimization:
-        _log_series(stream, s)
+    if rec.best is not None:
+        _log_motion(stream, rec.best)
+    for m in rec.baselines.values():
+        _log_motion(stream, m, m.name, signals=False, polylines=False)
+    paths = [(m.name, pl) for m in rec.baselines.values() for pl in m.polylines]
+    if paths:  # every baseline's path in one entity, labelled with its name
+        stream.log(
+            "world/baselines/paths",
+            rr.LineStrips3D(
+                [np.asarray(pl.points, dtype=np.float32) for _, pl in paths],
+                radii=[pl.radius for _, pl in paths],
+                colors=[pl.color for _, pl in paths],
+                labels=[name for name, _ in paths],
+            ),
+            static=True,
+        )
+    for entity, groups in _baseline_signals(rec):
+        _log_series_group(stream, [s for _, g in groups for s in g], "", entity, groups)
+    for group in _series_groups(rec.optimization):  # the objectives of best / ideal / nadir
+        _log_series_group(stream, group)
     display = _display_of(rec)
     for f, ui_radius in ((rec.front, FRONT_UI_RADIUS), (rec.best_point, BEST_UI_RADIUS)):
         if f is not None:
@@ -253,47 +270,63 @@ def _time_column(timeline: str, index: np.ndarray) -> rr.TimeColumn:
     return rr.TimeColumn(timeline, duration=np.asarray(index, dtype=np.float64))
 
 
-def _log_series(stream: rr.RecordingStream, s: Series) -> None:
+def _series_name(s: Series, tag: str = "") -> str:
+    """The line's name: ``label (unit)``, prefixed ``<tag>: `` (a baseline's name)."""
+    name = f"{s.label} ({s.unit})" if s.unit else s.label
+    return f"{tag}: {name}" if tag else name
+
+
+def _log_series(stream: rr.RecordingStream, s: Series, tag: str = "") -> None:
     stream.send_columns(
         s.path,
         indexes=[_time_column(s.timeline, s.index)],
         columns=rr.Scalars.columns(scalars=np.asarray(s.values, dtype=np.float64)),
     )
-    name = f"{s.label} ({s.unit})" if s.unit else s.label
-    stream.log(s.path, rr.SeriesLines(names=name), static=True)
+    name = _series_name(s, tag)
+    if name.replace(" ", "_") != s.path.rsplit("/", 1)[-1]:  # else the viewer's own name
+        stream.log(s.path, rr.SeriesLines(names=name), static=True)
+
+
+def _pose_geometry(p: PoseTrack, n: int) -> list[Any]:
+    """The columns (``n`` rows, the same value in each) of what a pose draws in its own frame:
+    sent with its transforms, one chunk per entity instead of a temporal and a static one (each
+    chunk costs ~1.5 kB of schema in a file; the repeated values a few bytes a row)."""
+    if p.geometry == "axes":
+        return list(rr.TransformAxes3D.columns(axis_length=np.full(n, p.axis_length, np.float32)))
+    if p.geometry == "capsule":
+        return list(
+            rr.Capsules3D.columns(
+                lengths=np.full(n, p.length, np.float32),
+                radii=np.full(n, p.radius, np.float32),
+                colors=np.tile(np.asarray(p.color, np.uint8), (n, 1)),
+            )
+        )
+    if p.geometry == "box":
+        return list(
+            rr.Boxes3D.columns(
+                half_sizes=np.tile(np.asarray(p.half_size, np.float32), (n, 1)),
+                colors=np.tile(np.asarray((*p.color, 200), np.uint8), (n, 1)),
+                fill_mode=["solid"] * n,
+            )
+        )
+    return []
 
 
 def _log_pose(stream: rr.RecordingStream, p: PoseTrack) -> None:
+    """A pose and what it draws: one chunk (static, or temporal with the geometry repeated)."""
     quat = lrec.quaternion_xyzw(p.rotation).astype(np.float32)  # vectorised; mat3x3 is not
-    if p.t is None:
-        stream.log(
-            p.path,
-            rr.Transform3D(translation=p.translation[0], quaternion=rr.Quaternion(xyzw=quat[0])),
-            static=True,
-        )
+    n = 1 if p.t is None else int(np.asarray(p.t).shape[0])
+    columns = [
+        *rr.Transform3D.columns(
+            translation=np.asarray(p.translation[:n], dtype=np.float32), quaternion=quat[:n]
+        ),
+        *_pose_geometry(p, n),
+    ]
+    if p.t is None:  # a static chunk: one row
+        stream.send_columns(p.path, indexes=[], columns=columns)
     else:
-        stream.send_columns(
-            p.path,
-            indexes=[_time_column("time", p.t)],
-            columns=rr.Transform3D.columns(
-                translation=np.asarray(p.translation, dtype=np.float32), quaternion=quat
-            ),
-        )
-    if p.geometry == "axes":
-        stream.log(p.path, rr.TransformAxes3D(p.axis_length), static=True)
-    elif p.geometry == "capsule":
-        stream.log(
-            p.path,
-            rr.Capsules3D(lengths=[p.length], radii=[p.radius], colors=[p.color]),
-            static=True,
-        )
-    elif p.geometry == "box":
-        stream.log(
-            p.path,
-            rr.Boxes3D(half_sizes=[p.half_size], colors=[(*p.color, 200)], fill_mode="solid"),
-            static=True,
-        )
-    elif p.geometry == "mesh" and p.mesh_data:  # a URDF mesh, scaled in a child entity
+        stream.send_columns(p.path, indexes=[_time_column("time", p.t)], columns=columns)
+    if p.geometry == "mesh" and p.mesh_data:  # a URDF mesh, scaled in a child entity
         # the bytes read inside the mesh roots (legcore.resource_paths); never a path opened here
         stream.log(f"{p.path}/mesh", rr.Transform3D(scale=p.half_size), static=True)
         media = rr.components.MediaType.guess_from_path(p.mesh)
@@ -320,14 +353,45 @@ def _series_groups(series: Sequence[Series]) -> list[list[Series]]:
     return out
 
 
-def _log_series_group(stream: rr.RecordingStream, group: Sequence[Series]) -> None:
-    """The joints of one signal as one entity (``Series.group``): a ``Scalars`` batch of one
-    value per joint at each sample, and one named line per joint."""
+def _baseline_signals(rec: RunRecording) -> list[tuple[str, list[tuple[str, list[Series]]]]]:
+    """The baselines' signals by entity: ``(entity, [(baseline name, its series), ...])``. A
+    signal every baseline has on the same samples is one entity for all of them,
+    ``baselines/signals/<kind>`` (one line per baseline and joint, named ``<baseline>: ...``):
+    a chunk is ~1.5 kB of schema whatever it holds. Otherwise each baseline keeps its own,
+    ``baselines/<name>/signals/<kind>``."""
+    by_kind: dict[str, list[tuple[str, list[Series]]]] = {}
+    for m in rec.baselines.values():
+        for g in _series_groups(m.series):
+            entity = g[0].group or g[0].path  # baselines/<part>/signals/...
+            by_kind.setdefault(entity.split("/", 2)[-1], []).append((m.name, g))
+    out: list[tuple[str, list[tuple[str, list[Series]]]]] = []
+    for kind, groups in by_kind.items():
+        first = groups[0][1][0]
+        if len(groups) > 1 and all(
+            g[0].timeline == first.timeline and np.array_equal(g[0].index, first.index)
+            for _, g in groups
+        ):
+            out.append((f"baselines/{kind}", groups))
+        else:
+            out.extend((g[0].group or g[0].path, [(name, g)]) for name, g in groups)
+    return out
+
+
+def _log_series_group(
+    stream: rr.RecordingStream,
+    group: Sequence[Series],
+    tag: str = "",
+    entity: str | None = None,
+    tagged: Sequence[tuple[str, Sequence[Series]]] = (),
+) -> None:
+    """The joints of one signal as one entity (``Series.group``, or ``entity``): a ``Scalars``
+    batch of one value per joint at each sample, and one named line per joint (``<tag>: ``
+    first; ``tagged``: (tag, series) pairs naming the lines of several motions)."""
     first = group[0]
-    entity = first.group
-    if len(group) == 1 or entity is None:
+    entity = entity or first.group
+    if (len(group) == 1 and not tagged) or entity is None:
         for s in group:
-            _log_series(stream, s)
+            _log_series(stream, s, tag)
         return
     values = np.stack([np.asarray(s.values, dtype=np.float64) for s in group], axis=1)
     n_rows, n = values.shape
@@ -336,15 +400,30 @@ def _log_series_group(stream: rr.RecordingStream, group: Sequence[Series]) -> No
         indexes=[_time_column(first.timeline, first.index)],
         columns=rr.Scalars.columns(scalars=values.ravel()).partition([n] * n_rows),
     )
-    names = [f"{s.label} ({s.unit})" if s.unit else s.label for s in group]
+    pairs = [(t, s) for t, g in tagged for s in g] if tagged else [(tag, s) for s in group]
+    names = [_series_name(s, t) for t, s in pairs]
     stream.log(entity, rr.SeriesLines(names=names), static=True)
 
 
-def _log_motion(stream: rr.RecordingStream, m: MotionRecording) -> None:
-    for group in _series_groups(m.series):
-        _log_series_group(stream, group)
+def _log_motion(
+    stream: rr.RecordingStream,
+    m: MotionRecording,
+    tag: str = "",
+    *,
+    signals: bool = True,
+    polylines: bool = True,
+) -> None:
+    """One motion's items; ``tag`` (a baseline's name) prefixes its series' names; without
+    ``signals`` its series are left to the caller (:func:`_baseline_signals`)."""
+    for group in _series_groups(m.series) if signals else []:
+        _log_series_group(stream, group, tag)
+    skeleton = _skeleton(m.poses)
+    if skeleton is not None:
+        _log_skeleton(stream, *skeleton)
+    drawn = set() if skeleton is None else {p.path for p in (*skeleton[1], *skeleton[2])}
     for p in m.poses:
-        _log_pose(stream, p)
+        if p.path not in drawn:
+            _log_pose(stream, p)
     for pt in m.points:
         N, P = pt.positions.shape[:2]
         stream.send_columns(
@@ -357,7 +436,26 @@ def _log_motion(stream: rr.RecordingStream, m: MotionRecording) -> None:
         stream.log(
             pt.path, rr.Points3D.from_fields(radii=[pt.radius], colors=[pt.color]), static=True
         )
-    for pl in m.polylines:
+    feet = [pl for pl in m.polylines if pl.path.endswith("/foot_path")]
+    path = next((pl for pl in m.polylines if pl.path.endswith("path") and pl not in feet), None)
+    strips: list[Any] = []
+    if polylines and feet and path is not None:  # the motion's path and its feet's: one entity
+        strips = [path, *feet]
+        stream.log(
+            path.path,
+            rr.LineStrips3D(
+                [np.asarray(pl.points, dtype=np.float32) for pl in strips],
+                radii=[pl.radius for pl in strips],
+                colors=[pl.color for pl in strips],
+                labels=["path", *(pl.path.split("/")[-2] for pl in feet)],
+            ),
+            static=True,
+        )
+    else:
+        strips = []
+    for pl in m.polylines if polylines else []:
+        if any(pl is x for x in strips):
+            continue
         stream.log(
             pl.path, rr.LineStrips3D([pl.points], radii=[pl.radius], colors=[pl.color]), static=True
         )
@@ -390,6 +488,130 @@ def _log_motion(stream: rr.RecordingStream, m: MotionRecording) -> None:
         )
 
 
+def _skeleton(poses: Sequence[PoseTrack]) -> tuple[str, list[PoseTrack], list[PoseTrack]] | None:
+    """(``<world>/robot/links``, link frames, links) of a robot drawn without meshes, to be
+    logged as that one entity (None: a URDF robot with meshes, which hang under its frame
+    entities, or poses on different samples). One entity instead of one per frame and per
+    link: each entity costs a file ~1.5 kB per chunk, 40–60 % of a small recording for a
+    hexapod's 26."""
+    frames = [p for p in poses if p.geometry == "axes"]
+    if not frames or any(p.geometry == "mesh" for p in poses):
+        return None
+    root = frames[0].path.split("/robot")[0]
+    body = f"{root}/robot/body"
+    links = [p for p in poses if p.geometry == "capsule" or p.path == body]
+    times = [p.t for p in (*frames, *links) if p.t is not None]
+    if any(not np.array_equal(t, times[0]) for t in times[1:]):
+        return None
+    return f"{root}/robot/links", frames, links
+
+
+def _axes_frames(frames: Sequence[PoseTrack]) -> list[PoseTrack]:
+    """The frames whose axes are drawn: every frame of a serial robot (base and tool frame
+    too); of a legged robot's legs (``.../robot/<leg>/frames/<k>``) the joint frames between
+    the base frame (fixed to the body, whose box shows its orientation) and the foot frame (the
+    foot is a point): half a hexapod leg's arrows, ~17 kB of a tiny recording."""
+    chains: dict[str, list[int]] = {}
+    for f in frames:
+        chain, _, k = f.path.rpartition("/frames/")
+        chains.setdefault(chain, []).append(int(k) if k.isdigit() else -1)
+
+    def drawn(f: PoseTrack) -> bool:
+        chain, _, k = f.path.rpartition("/frames/")
+        if chain.endswith("/robot") or not k.isdigit():  # a serial robot
+            return True
+        return min(chains[chain]) < int(k) < max(chains[chain])
+
+    return [f for f in frames if drawn(f)] or list(frames)
+
+
+def _world_poses(p: PoseTrack, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(R (n, 3, 3), t (n, 3)) of a pose, a static one repeated."""
+    R = np.broadcast_to(np.asarray(p.rotation, dtype=float), (n, 3, 3))
+    t = np.broadcast_to(np.asarray(p.translation, dtype=float), (n, 3))
+    return R, t
+
+
+def _send(
+    stream: rr.RecordingStream, entity: str, t: np.ndarray | None, columns: list[Any]
+) -> None:
+    """One chunk: temporal on ``time`` at ``t``, or static (one row) when ``t`` is None."""
+    indexes = [] if t is None else [_time_column("time", t)]
+    stream.send_columns(entity, indexes=indexes, columns=columns)
+
+
+def _log_skeleton(
+    stream: rr.RecordingStream, entity: str, frames: list[PoseTrack], links: list[PoseTrack]
+) -> None:
+    """A robot over time as two entities, each one temporal chunk (a batch per sample) and one
+    static chunk (sizes, colours):
+
+    - ``<robot>/links``: ``Capsules3D``, link k from frame origin k−1 to k, posed in the world;
+    - ``<robot>/axes``: ``Arrows3D``, the x / y / z axes (red / green / blue, ``axis_length``)
+      of every link frame from its origin — frame ``i`` is arrows ``3i … 3i+2``, in the order
+      of the frames (``world/robot[/<leg>]/frames/<k>``); their meeting points are the joints.
+    """
+    t = next((p.t for p in (*frames, *links) if p.t is not None), None)
+    n = 1 if t is None else int(np.asarray(t).shape[0])
+    axes = _axes_frames(frames)
+    R = np.stack([_world_poses(f, n)[0] for f in axes], axis=1)  # (n, F, 3, 3)
+    origins = np.stack([_world_poses(f, n)[1] for f in axes], axis=1)  # (n, F, 3)
+    lengths = np.array([f.axis_length for f in axes])
+    vectors = np.swapaxes(R, 2, 3) * lengths[None, :, None, None]  # [..., i, :]: axis i
+    F = len(axes)
+    columns: list[Any] = [
+        *rr.Arrows3D.columns(
+            vectors=vectors.reshape(-1, 3).astype(np.float32),
+            origins=np.repeat(origins, 3, axis=1).reshape(-1, 3).astype(np.float32),
+        ).partition([3 * F] * n)
+    ]
+    static: list[Any] = [
+        rr.Arrows3D.from_fields(colors=np.tile(np.asarray(C_XYZ, np.uint8), (F, 1)))
+    ]
+    boxes = [p for p in links if p.geometry == "box"]  # a legged robot's body
+    links = [p for p in links if p.geometry == "capsule"]
+    if boxes:
+        Rb = [_world_poses(b, n) for b in boxes]
+        columns += rr.Boxes3D.columns(
+            centers=np.stack([tb for _, tb in Rb], axis=1).reshape(-1, 3).astype(np.float32),
+            quaternions=np.stack([lrec.quaternion_xyzw(R) for R, _ in Rb], axis=1)
+            .reshape(-1, 4)
+            .astype(np.float32),
+        ).partition([len(boxes)] * n)
+        static.append(
+            rr.Boxes3D.from_fields(
+                half_sizes=[b.half_size for b in boxes],
+                colors=[(*b.color, 200) for b in boxes],
+                fill_mode="solid",
+            )
+        )
+    if links:
+        by_path = {f.path: f for f in frames}
+        cap_t, cap_q = [], []
+        for link in links:
+            Rf, tf = _world_poses(by_path[link.path.rsplit("/", 1)[0]], n)
+            Rl, tl = _world_poses(link, n)
+            cap_t.append(tf + np.einsum("nij,nj->ni", Rf, tl))
+            cap_q.append(lrec.quaternion_xyzw(Rf @ Rl))
+        columns += rr.Capsules3D.columns(
+            translations=np.stack(cap_t, axis=1).reshape(-1, 3).astype(np.float32),
+            quaternions=np.stack(cap_q, axis=1).reshape(-1, 4).astype(np.float32),
+        ).partition([len(links)] * n)
+        static.append(
+            rr.Capsules3D.from_fields(
+                lengths=[p.length for p in links],
+                radii=[p.radius for p in links],
+                colors=[p.color for p in links],
+            )
+        )
+    _send(stream, entity, t, columns)
+    stream.log(entity, *static, static=True)
+
+
+#: Colours of a frame's x, y and z axes (the arrows keep rerun's default radius: one column
+#: less, ~0.8 kB).
+C_XYZ = ((230, 40, 40), (40, 170, 40), (40, 90, 230))
+
 #: Point radii of the fronts in UI points (negative radii: screen-space, whatever the scale).
 FRONT_UI_RADIUS, BEST_UI_RADIUS, FINAL_UI_RADIUS, AXIS_UI_RADIUS = -2.5, -5.0, -3.5, -0.6
 C_AXES = (140, 140, 140)
@@ -416,8 +638,8 @@ def _log_front_frame(stream: rr.RecordingStream, f: FrontTrack, display: FrontDi
     arche: Any = rr.Points3D if f.dims == 3 else rr.Points2D
     final = np.asarray(f.points[-1], dtype=np.float32)[:, : f.dims]
     path = "optimization/final_front"
-    stream.log(path, arche(final, radii=[FINAL_UI_RADIUS], colors=[C_FINAL]), static=True)
-    stream.log(path, _box_transform(display), static=True)
+    points = arche(final, radii=[FINAL_UI_RADIUS], colors=[C_FINAL])
+    stream.log(path, points, _box_transform(display), static=True)  # one chunk
     _log_axes(stream, "optimization/axes", display)
 
 
@@ -426,9 +648,11 @@ def _log_axes(stream: rr.RecordingStream, path: str, display: FrontDisplay) -> N
     as ``legopt_axis_names`` for a merge to read back) and ``path/labels`` (names, ticks)."""
     lines, marks = display.axes()
     strips: Any = rr.LineStrips3D if display.dims == 3 else rr.LineStrips2D
-    stream.log(
+    stream.log(  # one chunk: the lines, the box and the names
         path,
         strips([a.astype(np.float32) for a in lines], colors=[C_AXES], radii=[AXIS_UI_RADIUS]),
+        _box_transform(display),
+        rr.AnyValues(legopt_axis_names=list(display.labels)),
         static=True,
     )
     stream.log(
@@ -441,8 +665,6 @@ def _log_axes(stream: rr.RecordingStream, path: str, display: FrontDisplay) -> N
         ),
         static=True,
     )
-    stream.log(path, _box_transform(display), static=True)
-    stream.log(path, rr.AnyValues(legopt_axis_names=list(display.labels)), static=True)
 
 
 def _log_front(
@@ -464,9 +686,8 @@ def _log_front(
         columns=arche.columns(positions=pts[:, : f.dims]).partition(lengths),
     )
     radius = f.radius if display is None or ui_radius is None else ui_radius
-    stream.log(f.path, arche.from_fields(radii=[radius], colors=[f.color]), static=True)
-    if display is not None:
-        stream.log(f.path, _box_transform(display), static=True)
+    box = [] if display is None else [_box_transform(display)]
+    stream.log(f.path, arche.from_fields(radii=[radius], colors=[f.color]), *box, static=True)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -491,7 +712,29 @@ def read_entities(path: Path) -> dict[str, set[str]]:
 
 
 def _entities_of(rec: RunRecording) -> dict[str, set[str]]:
-    out: dict[str, set[str]] = {p: set() for p in rec.entity_paths()}
+    """The entities :func:`log_run` writes for ``rec`` (what :func:`read_entities` reads back;
+    archetypes only for the fronts)."""
+    baseline_series = {s.path for m in rec.baselines.values() for s in m.series}
+    out: dict[str, set[str]] = {p: set() for p in rec.entity_paths() if p not in baseline_series}
+    out.update((entity, set()) for entity, _ in _baseline_signals(rec))
+    for s in rec.optimization:  # the objectives of best / ideal / nadir: one entity each
+        if s.group is not None:
+            out.pop(s.path, None)
+            out[s.group] = set()
+    if rec.best is not None:
+        skeleton = _skeleton(rec.best.poses)
+        if skeleton is not None:  # the robot: one entity
+            for p in (*skeleton[1], *skeleton[2]):
+                out.pop(p.path, None)
+            out[skeleton[0]] = set()
+        feet = [pl.path for pl in rec.best.polylines if pl.path.endswith("/foot_path")]
+        if any(pl.path == "world/path" for pl in rec.best.polylines):
+            for foot in feet:  # drawn with the motion's path
+                out.pop(foot, None)
+    for m in rec.baselines.values():
+        for pl in m.polylines:
+            out.pop(pl.path, None)
+            out["world/baselines/paths"] = set()
     for f in (rec.front, rec.best_point):
         if f is not None:
             out[f.path] = {
@@ -554,16 +797,19 @@ def _job_views(
                 origin=f"{root}optimization/best", name=f"{tag}best objective / generation"
             )
         )
-    baselines = sorted(
-        {e[len(root) :].split("/")[1] for e in ents if e.startswith(root + "baselines/")}
+    baseline_q = sorted(
+        {
+            f"+ /{e.split('/signals/q')[0]}/signals/q/**"
+            for e in ents
+            if e.startswith(root + "baselines/") and (e + "/").count("/signals/q/")
+        }
     )
-    for b in baselines:
-        if has(f"baselines/{b}/signals/q"):
-            series.append(
-                rrb.TimeSeriesView(
-                    origin=f"{root}baselines/{b}/signals/q", name=f"{tag}baseline {b}: q (rad)"
-                )
+    if baseline_q:  # one view for every baseline (its series are named "<baseline>: ...")
+        series.append(
+            rrb.TimeSeriesView(
+                origin=f"{root}baselines", contents=baseline_q, name=f"{tag}baselines: q (rad)"
             )
+        )
     return spatial, series
 
 
@@ -581,9 +827,7 @@ def blueprint_for(
     if jobs:
         with_front = [j for j in jobs if f"jobs/{j}/optimization/front" in ents]
         fronts = [
-            f"+ /jobs/{j}/optimization/{e}"
-            for j in with_front
-            for e in ("front", "final_front")
+            f"+ /jobs/{j}/optimization/{e}" for j in with_front for e in ("front", "final_front")
         ] + [f"+ /jobs/{j}/optimization/axes/**" for j in with_front[:1]]
         if len(with_front) > 1:
             two_d = any(
@@ -605,7 +849,7 @@ def blueprint_for(
         best = [
             f"+ /jobs/{j}/optimization/best/**"
             for j in jobs
-            if any(e.startswith(f"jobs/{j}/optimization/best/") for e in ents)
+            if any((e + "/").startswith(f"jobs/{j}/optimization/best/") for e in ents)
         ]
         if best:
             series.append(
@@ -651,12 +895,30 @@ _COLOR_NAMES = ("blue", "red", "green", "orange", "purple", "brown", "pink", "cy
                 "grey", "navy", "maroon")  # fmt: skip
 
 
+def _series_names_of(path: Path, entity: str) -> list[str]:
+    """The line names (static ``SeriesLines:names``) of ``entity`` in the recording ``path``."""
+    names: list[str] = []
+    for chunk in RrdReader(path).stream():
+        if chunk.entity_path.lstrip("/") != entity:
+            continue
+        batch = chunk.to_record_batch()
+        if "SeriesLines:names" in batch.schema.names:
+            rows = [r for r in batch.column("SeriesLines:names").to_pylist() if r]
+            names = [str(n) for n in rows[-1]] if rows else names
+    return names
+
+
 def _colour_job(
-    stream: rr.RecordingStream, ents: Mapping[str, set[str]], part: str, color: tuple[int, ...]
+    stream: rr.RecordingStream,
+    ents: Mapping[str, set[str]],
+    part: str,
+    color: tuple[int, ...],
+    best_names: Sequence[str] = (),
 ) -> None:
     """Give job ``part`` of a merged recording its own colour and name on the overlaid items
     (front points, energy and best-objective series): static values logged after the job's
-    own, so they replace them."""
+    own, so they replace them. ``best_names``: the job's names of its objectives' lines in the
+    grouped ``optimization/best`` entity (one line per objective), prefixed here ``<part>: ``."""
     root = f"jobs/{part}/"
     for e, archetypes in ents.items():
         if not e.startswith(root):
@@ -667,6 +929,9 @@ def _colour_job(
             stream.log(e, arche.from_fields(colors=[color]), static=True)
         elif rel == "signals/energy/total":
             stream.log(e, rr.SeriesLines(colors=[color], names=[f"{part}: energy"]), static=True)
+        elif rel == "optimization/best":  # the objectives in one entity: one line each
+            names = [f"{part}: {n}" for n in best_names] or [f"{part}: best"]
+            stream.log(e, rr.SeriesLines(colors=[color] * len(names), names=names), static=True)
         elif rel.startswith("optimization/best/"):
             name = f"{part}: best {rel.rsplit('/', 1)[-1]}"
             stream.log(e, rr.SeriesLines(colors=[color], names=[name]), static=True)
@@ -745,7 +1010,8 @@ def merge_recordings(
                 for c in RrdReader(p).stream()
                 if not c.entity_path.startswith("/__")
             )
-            _colour_job(stream, ents, part, JOB_COLORS[i % len(JOB_COLORS)])
+            best_names = _series_names_of(p, "optimization/best")
+            _colour_job(stream, ents, part, JOB_COLORS[i % len(JOB_COLORS)], best_names)
             if common is not None and f"jobs/{part}/optimization/front" in ents:
                 root = f"jobs/{part}/optimization"
                 for e in ("front", "best_point", "final_front"):

@@ -295,14 +295,21 @@ def test_record_run_size_budget() -> None:
     base = {f"b{i}": arm_motion(K=4000) for i in range(4)}
     res = fake_result(arm_motion(K=4000), m=2, generations=30, baselines=base)
     fronts = {g: np.random.default_rng(g).random((500, 2)) for g in range(1, 31)}
-    full = R.record_run(res, fronts=fronts, max_bytes=None)
+    # every signal of the baselines (by default only q and the total energy: see below)
+    full = R.record_run(res, fronts=fronts, max_bytes=None, baseline_signals=None)
     assert R.estimate_bytes(full) == full.properties["estimated_bytes"]
     budget = int(0.6 * R.estimate_bytes(full))
-    rec = R.record_run(res, fronts=fronts, max_bytes=budget)
+    rec = R.record_run(res, fronts=fronts, max_bytes=budget, baseline_signals=None)
     assert R.estimate_bytes(rec) <= budget
     assert rec.properties["max_samples_baselines"] < 2000  # baselines lowered first
     assert rec.properties["max_samples_best"] == 2000
     assert rec.best is not None and rec.best.series_at("signals/q/q1").n_samples > 1000
+    lean = R.record_run(res, fronts=fronts, max_bytes=None)  # the default baseline signals
+    kinds = {s.path.split("/signals/")[1].rsplit("/", 1)[0] for s in lean.baselines["b0"].series}
+    assert kinds == {"q", "energy"} and R.estimate_bytes(lean) < R.estimate_bytes(full)
+    assert [s.path for s in lean.baselines["b0"].series if "/energy/" in s.path] == [
+        "baselines/b0/signals/energy/total"
+    ]
     # an impossible budget: every cap at its floor, and a note says it is over
     tiny = R.record_run(res, fronts=fronts, max_bytes=10_000)
     p = tiny.properties
