@@ -10,7 +10,11 @@ from __future__ import annotations
 
 from typing import Any
 
+from legcore.kernel_cache import check_kernel_cache
+
 __all__ = ["run"]
+
+check_kernel_cache()  # cached numba kernels of an older source are stale: drop them first
 
 
 def __getattr__(name: str) -> Any:
