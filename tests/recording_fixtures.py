@@ -6,10 +6,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from legcore import recording as R
 from legcore.dynamics import inverse_dynamics
 from legcore.kinematics import fk
 from legcore.problems.study import Motion, Solution
+from legcore.recording.helpers import _cumtrapz
 from legcore.robots import catalog
 
 
@@ -23,7 +23,7 @@ def arm_motion(K: int = 5000, T: float = 3.0, **scene: object) -> Motion:
     jerk = np.gradient(qdd, t, axis=0)
     tau = inverse_dynamics(robot, q, qd, qdd)
     power = tau * qd
-    energy = R._cumtrapz(np.abs(power), t).sum(axis=1)
+    energy = _cumtrapz(np.abs(power), t).sum(axis=1)
     return Motion(
         t=t,
         q=q,

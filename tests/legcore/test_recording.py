@@ -11,6 +11,7 @@ import yaml
 from legcore import recording as R
 from legcore.kinematics import fk, frames
 from legcore.problems.study import Box, Motion
+from legcore.recording.helpers import _chain_scale
 from legcore.robots import catalog
 from tests.recording_fixtures import arm_motion, fake_result
 
@@ -139,7 +140,7 @@ def test_record_motion_frames_links_and_tool_match_kinematics() -> None:
     np.testing.assert_allclose(tool.positions[:, 0], fk(robot, motion.q[idx])[:, :3, 3], atol=1e-12)
     path = next(p for p in rec.polylines if p.path == "world/path")
     assert path.points.shape == (500, 3) and path.source_samples == 3000
-    assert R.link_radius(robot) == pytest.approx(0.035 * R._chain_scale(robot))
+    assert R.link_radius(robot) == pytest.approx(0.035 * _chain_scale(robot))
 
 
 def test_record_motion_tool_link_when_tool_is_offset() -> None:
