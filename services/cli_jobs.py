@@ -215,7 +215,7 @@ def replay(
     with --point K, the recording of the K-th point of its Pareto front."""
     import signal
 
-    from services.worker import rerun_writer
+    from services.worker import rerun_replay
 
     path = Path(target)
     if not path.exists():
@@ -240,7 +240,7 @@ def replay(
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, _interrupt)  # a terminated replay also stops its viewer
-    handle = rerun_writer.open_viewer(path, web=True if web else None, port=port)
+    handle = rerun_replay.open_viewer(path, web=True if web else None, port=port)
     if handle.url:
         console.print(f"Rerun web viewer: {handle.url}  (Ctrl-C to stop)")
     try:

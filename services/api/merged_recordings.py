@@ -25,7 +25,7 @@ TIMEOUT_S = 300.0
 _CHILD = (
     "import json, sys\n"
     "from pathlib import Path\n"
-    "from services.worker.rerun_writer import merge_recordings\n"
+    "from services.worker.rerun_merge import merge_recordings\n"
     "a = json.loads(sys.argv[1])\n"
     "merge_recordings([Path(p) for p in a['paths']], Path(a['out']), a['names'])\n"
 )

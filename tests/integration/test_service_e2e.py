@@ -14,7 +14,7 @@ from sqlalchemy import func, select
 from services.client import TERMINAL, ApiError
 from services.store.session import make_engine, session_scope
 from services.store.tables import GENERATIONS, JOBS, PARETO_POINTS, RESULTS
-from services.worker.rerun_writer import read_entities
+from services.worker.rerun_blueprint import read_entities
 from tests.integration.stack import ROOT, Stack
 
 pytestmark = pytest.mark.integration

@@ -141,6 +141,7 @@ def test_recording_embeds_no_named_file(tmp_path: Path, monkeypatch: pytest.Monk
     from legcore.kinematics import fk
     from legcore.problems.study import Motion
     from legcore.robots import build_robot
+    from services.worker import rerun_blueprint as B
     from services.worker import rerun_writer as W
     from tests.recording_fixtures import fake_result
 
@@ -155,7 +156,7 @@ def test_recording_embeds_no_named_file(tmp_path: Path, monkeypatch: pytest.Monk
     result: Any = fake_result(motion, m=1, generations=2)
     notes = W.write_recording(result, path, robot=robot)
     assert leaked(path.read_bytes(), tokens) == []
-    assert not any(e.endswith("/mesh") for e in W.read_entities(path))
+    assert not any(e.endswith("/mesh") for e in B.read_entities(path))
     assert _not_read_warnings(notes or [], names) == [], notes
     assert any("no file access" in n and "drawn as a capsule" in n for n in notes or []), notes
 
@@ -166,6 +167,7 @@ def test_a_mesh_inside_the_mesh_roots_is_recorded(tmp_path: Path) -> None:
     from legcore.kinematics import fk
     from legcore.problems.study import Motion
     from legcore.robots import build_robot
+    from services.worker import rerun_blueprint as B
     from services.worker import rerun_writer as W
     from tests.recording_fixtures import fake_result
 
@@ -186,7 +188,7 @@ def test_a_mesh_inside_the_mesh_roots_is_recorded(tmp_path: Path) -> None:
     result: Any = fake_result(motion, m=1, generations=2)
     notes = W.write_recording(result, path, robot=robot, mesh_roots=[root])
     assert leaked(path.read_bytes(), {**tokens, "legit": b"LEGIT-MESH-7d3a"}) == ["legit"]
-    meshes = [e for e, a in W.read_entities(path).items() if "rerun.archetypes.Asset3D" in a]
+    meshes = [e for e, a in B.read_entities(path).items() if "rerun.archetypes.Asset3D" in a]
     assert len(meshes) == 1 and meshes[0].endswith("frames/0/visual_0/mesh"), meshes
     del names["legit"]
     assert _not_read_warnings(notes, names) == [], notes

@@ -188,7 +188,7 @@ def test_point_motion_and_recording_are_made_once(env: dict[str, Any]) -> None:
     assert art.relative_path.rsplit("/", 1)[0] == result.relative_path.rsplit("/", 1)[0]
     again = client.get(url, headers=alice)
     assert again.content == first.content  # served from the artifact store
-    from services.worker.rerun_writer import read_entities
+    from services.worker.rerun_blueprint import read_entities
 
     rrd = Path(ctx.settings.data_dir) / "point.rrd"
     rrd.write_bytes(first.content)

@@ -11,6 +11,7 @@ import numpy as np
 import pyarrow as pa
 from rerun.chunk import RrdReader
 
+from services.worker import rerun_merge as M
 from services.worker import rerun_writer as W
 from services.worker.front_display import front_display
 from tests.recording_fixtures import arm_motion, fake_result
@@ -70,7 +71,7 @@ def test_merged_recording_colours_and_boxes_jobs_together(tmp_path: Path) -> Non
         W.write_recording(fake_result(arm_motion(K=50), generations=1), p, fronts=fronts)
         paths.append(p)
     out = tmp_path / "merged.rrd"
-    W.merge_recordings(paths, out, ["a", "b"])
+    M.merge_recordings(paths, out, ["a", "b"])
     ents = chunks(out)
     colours = [values(ents[f"jobs/{j}/optimization/front"], ":colors")[-1] for j in "ab"]
     assert colours[0] != colours[1]

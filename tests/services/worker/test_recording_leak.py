@@ -31,6 +31,7 @@ import gc, json, os, sys, tempfile
 from pathlib import Path
 from tests.recording_fixtures import arm_motion, fake_result
 from services.worker import rerun_writer as W
+from services.worker import rerun_merge as M
 
 def threads():
     return len(os.listdir("/proc/self/task"))
@@ -52,7 +53,7 @@ def one(i):
     if mode == "write":
         W.write_recording(res, d / f"w{i % 2}.rrd")
     else:
-        W.merge_recordings([d / "a.rrd", d / "b.rrd"], d / "m.rrd", ["a", "b"])
+        M.merge_recordings([d / "a.rrd", d / "b.rrd"], d / "m.rrd", ["a", "b"])
 
 for i in range(3):  # warm-up: rerun's runtime threads, allocator arenas
     one(i)

@@ -12,6 +12,7 @@ import pytest
 from legcore.kinematics import fk
 from legcore.problems.study import Motion
 from legcore.robots import build_robot
+from services.worker import rerun_blueprint as B
 from services.worker import rerun_writer as W
 from tests.recording_fixtures import fake_result
 
@@ -59,7 +60,7 @@ def test_urdf_visuals_are_recorded(robot_and_motion, tmp_path: Path) -> None:  #
     W.write_recording(
         fake_result(motion, m=1, generations=2), path, robot=robot, mesh_roots=[tmp_path]
     )
-    entities = W.read_entities(path)
+    entities = B.read_entities(path)
     visuals = {e: a for e, a in entities.items() if "/visual_" in e}
     kinds = {next(iter(sorted(a)), "") for a in visuals.values() if a}
     assert any(e.endswith("frames/0/visual_0") for e in visuals), visuals  # base box
@@ -71,7 +72,7 @@ def test_urdf_visuals_are_recorded(robot_and_motion, tmp_path: Path) -> None:  #
     # the same robot uploaded (no roots): no file is read, the mesh is noted
     bare = tmp_path / "bare.rrd"
     notes = W.write_recording(fake_result(motion, m=1, generations=2), bare, robot=robot)
-    assert not any("rerun.archetypes.Asset3D" in a for a in W.read_entities(bare).values())
+    assert not any("rerun.archetypes.Asset3D" in a for a in B.read_entities(bare).values())
     assert any("package://vis/tri.obj" in n and "no file access" in n for n in notes)
 
 

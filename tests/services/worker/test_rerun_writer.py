@@ -20,6 +20,9 @@ from legcore import recording as R
 from legcore.kinematics import frames
 from legcore.problems.study import Box, Motion
 from legcore.robots import catalog
+from services.worker import rerun_blueprint as B
+from services.worker import rerun_merge as M
+from services.worker import rerun_replay as RP
 from services.worker import rerun_writer as W
 from tests.recording_fixtures import arm_motion, fake_result
 
@@ -159,8 +162,8 @@ def test_entity_paths(written: tuple) -> None:
     )
     missing = [e for e in expected if e not in ents]
     assert not missing
-    assert set(W.read_entities(path)) == set(ents) - {e for e in ents if e.startswith("__")}
-    links = W.read_entities(path)["world/robot/links"]  # the whole robot: one entity
+    assert set(B.read_entities(path)) == set(ents) - {e for e in ents if e.startswith("__")}
+    links = B.read_entities(path)["world/robot/links"]  # the whole robot: one entity
     assert {"rerun.archetypes.Capsules3D", "rerun.archetypes.Arrows3D"} <= links
     assert not any("/frames/" in e for e in ents)
     assert not any(e.startswith("signals/q/") for e in ents)  # the joints share one entity
@@ -333,7 +336,7 @@ def test_merge_recordings(tmp_path: Path) -> None:
     W.write_recording(fake_result(arm_motion(K=300), generations=4), a, recording_id="job-a")
     W.write_recording(fake_result(arm_motion(K=700), generations=6), b, recording_id="job-b")
     out = tmp_path / "sweep" / "merged.rrd"
-    W.merge_recordings([a, b], out, ["seed 1", "seed-2"], recording_id="sweep-1")
+    M.merge_recordings([a, b], out, ["seed 1", "seed-2"], recording_id="sweep-1")
     reader = RrdReader(out)
     (store,) = reader.recordings()
     assert store.recording_id == "sweep-1" and len(reader.blueprints()) == 1
@@ -347,7 +350,7 @@ def test_merge_recordings(tmp_path: Path) -> None:
     g, _ = column(ents["jobs/seed-2/optimization/front"], "Points3D:positions", "generation")
     assert list(g) == [6]
     with pytest.raises(ValueError, match="names"):
-        W.merge_recordings([a, b], out, ["only one"])
+        M.merge_recordings([a, b], out, ["only one"])
 
 
 def test_merged_recording_is_made_in_a_child_once_and_cached(
@@ -386,7 +389,7 @@ def views(container: object) -> list[tuple[str, str, str]]:
 
 def test_blueprint_views() -> None:
     res = fake_result(arm_motion(K=50), baselines={"p": arm_motion(K=50)})
-    bp = W.blueprint_for(R.record_run(res))
+    bp = B.blueprint_for(R.record_run(res))
     v = views(bp.root_container)
     assert ("Spatial3DView", "world", "robot, path and scene") in v
     assert ("Spatial3DView", "optimization", "Pareto front") in v
@@ -398,7 +401,7 @@ def test_blueprint_views() -> None:
     ents["jobs/a/optimization/front"] = ents["jobs/b/optimization/front"] = {
         "rerun.archetypes.Points3D"
     }
-    v = views(W.blueprint_for(ents, jobs=["a", "b"]).root_container)
+    v = views(B.blueprint_for(ents, jobs=["a", "b"]).root_container)
     names = {n for _, _, n in v}
     assert {"Pareto fronts, all jobs", "energy (J), all jobs", "a: q (rad)", "b: q (rad)"} <= names
 
@@ -413,7 +416,7 @@ def test_serve_web_answers_200_on_localhost_and_serves_the_data(
     written: tuple, tmp_path: Path
 ) -> None:
     path, _, _ = written
-    with W.serve_web(path, None, timeout=20) as viewer:
+    with RP.serve_web(path, None, timeout=20) as viewer:
         assert viewer.url is not None and viewer.url.startswith("http://127.0.0.1:")
         r = httpx.get(viewer.url, timeout=5)
         assert r.status_code == 200
@@ -422,7 +425,7 @@ def test_serve_web_answers_200_on_localhost_and_serves_the_data(
         grpc = httpx.URL(viewer.url).params["url"]
         got = tmp_path / "got.rrd"
         saver = subprocess.Popen(
-            [W.rerun_binary(), "--connect", grpc, "--save", str(got)],
+            [RP.rerun_binary(), "--connect", grpc, "--save", str(got)],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -438,7 +441,7 @@ def test_serve_web_answers_200_on_localhost_and_serves_the_data(
         finally:
             saver.terminate()
             saver.wait(10)
-        assert "signals/q" in W.read_entities(got)
+        assert "signals/q" in B.read_entities(got)
     assert viewer.process.poll() is not None  # stopped
 
 
@@ -448,7 +451,7 @@ def test_serve_web_on_a_busy_port_fails_clearly(written: tuple) -> None:
         busy.bind(("127.0.0.1", 0))
         busy.listen()
         with pytest.raises(RuntimeError, match="already in use"):
-            W.serve_web(path, busy.getsockname()[1], timeout=10)
+            RP.serve_web(path, busy.getsockname()[1], timeout=10)
 
 
 def test_open_viewer_without_display_uses_the_web_viewer(
@@ -457,14 +460,14 @@ def test_open_viewer_without_display_uses_the_web_viewer(
     path, _, _ = written
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    monkeypatch.setattr(W.sys, "platform", "linux")
-    assert not W.has_display()
-    port = W._free_port()
-    with W.open_viewer(path, port=port) as viewer:
+    monkeypatch.setattr(RP.sys, "platform", "linux")
+    assert not RP.has_display()
+    port = RP._free_port()
+    with RP.open_viewer(path, port=port) as viewer:
         assert viewer.url is not None and f":{port}/" in viewer.url
         assert httpx.get(viewer.url, timeout=5).status_code == 200
     with pytest.raises(FileNotFoundError):
-        W.open_viewer(path.with_name("missing.rrd"))
+        RP.open_viewer(path.with_name("missing.rrd"))
 
 
 # ---------------------------------------------------------------------------------------------
