@@ -260,7 +260,7 @@ def summary_block(
         if i < len(view.objective_names):
             name += " — maximised" if m.sense == "max" else " — minimised"
         pr = prows.get(key)
-        symbol = (pr.paper if pr and pr.paper else "") or m.paper
+        symbol = pr.symbol(view.kind) if pr else m.paper
         if symbol:
             name += f" (paper: {symbol})"
         at_opt = bool(pr and pr.at_optimum)

@@ -32,6 +32,13 @@ class PaperRow:
     note: str = ""
     at_optimum: bool = False
 
+    def symbol(self, kind: str | None) -> str:
+        """The paper's name for the quantity: the row's own, else the metric's (its
+        ``legcore.problems.metric_names`` entry for the study ``kind``); '' when it has none."""
+        from legcore.problems.metric_names import metric_name
+
+        return self.paper or metric_name(self.metric, kind).paper
+
 
 @dataclass(frozen=True)
 class PaperEntry:

@@ -12,6 +12,7 @@ through the installed distribution::
 from __future__ import annotations
 
 import importlib.metadata
+import os
 from pathlib import Path
 
 __all__ = ["ERD_URDF", "erd_robots_dir"]
@@ -39,3 +40,17 @@ def erd_robots_dir() -> Path | None:
         return None
     path = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
     return path if path.is_dir() else None
+
+
+def require_erd() -> Path:
+    """The wheel's robots directory; skips the test without it — or fails, where
+    ``LEGOPT_REQUIRE_ROBOT_DATA=1`` (``.ci/run``: a real-robot test must not silently skip)."""
+    import pytest
+
+    root = erd_robots_dir()
+    if root is None:
+        why = "example-robot-data is not installed (dev dependency, see pyproject.toml)"
+        if os.environ.get("LEGOPT_REQUIRE_ROBOT_DATA") == "1":
+            pytest.fail(why)
+        pytest.skip(why)
+    return root

@@ -1,14 +1,13 @@
 """Kinematics of one sample for the compiled IK loop: tool pose + Jacobian, task errors.
 
-:func:`fk_jac_one` is the per-sample, allocation-free form of the batched kernel of
-:mod:`legcore.kinematics` (same conventions: joint i's world pose is
+The IK loop runs on the chain re-expressed by :func:`z_chain` (every joint turning about its
+frame's z axis; the conventions of :mod:`legcore.kinematics`: joint i's world pose is
 ``pose_{i-1} · (R_i, p_i) · exp(axis_i q_i)``, Jacobian rows ``[v; ω]`` world-aligned at the
-tool point); ``tests/legcore/test_ik_numeric.py`` checks it against
-:func:`legcore.kinematics.fk_jacobian`. The IK loop itself runs on the chain re-expressed by
-:func:`z_chain` (every joint turning about its frame's z axis): :func:`fk_z` (tool pose, a joint
-a turn of two frame columns instead of Rodrigues + a 3×3 product) and :func:`jac_z` (the
-Jacobian from the frames ``fk_z`` leaves, computed only when a step needs it); tested equal to
-the batched kernel too. :func:`task_error` turns a tool pose into the error of an IK task
+tool point): :func:`fk_z` (tool pose, a joint a turn of two frame columns instead of Rodrigues
++ a 3×3 product) and :func:`jac_z` (the Jacobian from the frames ``fk_z`` leaves, computed
+only when a step needs it); ``tests/legcore/test_ik_numeric.py`` checks them against
+:func:`legcore.kinematics.fk_jacobian` and a plain per-sample reference.
+:func:`task_error` turns a tool pose into the error of an IK task
 (``TASK_POSITION`` 3, ``TASK_AXIS`` 5, ``TASK_POSE`` 6 rows), :func:`task_rows` gives its
 Jacobian rows (:func:`errors`: both); :func:`interp_target` interpolates between two targets
 (continuation along a path).
@@ -27,7 +26,6 @@ __all__ = [
     "TASK_POSE",
     "TASK_POSITION",
     "errors",
-    "fk_jac_one",
     "fk_z",
     "interp_target",
     "jac_z",
@@ -42,86 +40,6 @@ BoolArray = NDArray[np.bool_]
 TASK_POSITION = 3
 TASK_AXIS = 5
 TASK_POSE = 6
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def fk_jac_one(
-    q: FloatArray,
-    R: FloatArray,
-    p: FloatArray,
-    axis: FloatArray,
-    prismatic: BoolArray,
-    tool_R: FloatArray,
-    tool_p: FloatArray,
-    Rw: FloatArray,
-    pw: FloatArray,
-    T: FloatArray,
-    J: FloatArray,
-) -> None:  # pragma: no cover - compiled
-    """Tool pose ``T`` (4, 4) and Jacobian ``J`` (6, n) of ``q`` (n,) on chain arrays.
-
-    ``Rw`` (n, 3, 3) and ``pw`` (n, 3) are scratch: the joint frames in the world.
-    """
-    n = q.shape[0]
-    for i in range(n):
-        r = R[i]
-        if i == 0:
-            for a in range(3):
-                pw[0, a] = p[0, a]
-                for c in range(3):
-                    Rw[0, a, c] = r[a, c]
-        else:
-            for a in range(3):
-                g0, g1, g2 = Rw[i - 1, a, 0], Rw[i - 1, a, 1], Rw[i - 1, a, 2]
-                pw[i, a] = pw[i - 1, a] + g0 * p[i, 0] + g1 * p[i, 1] + g2 * p[i, 2]
-                for c in range(3):
-                    Rw[i, a, c] = g0 * r[0, c] + g1 * r[1, c] + g2 * r[2, c]
-        ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
-        qi = q[i]
-        if prismatic[i]:
-            for a in range(3):
-                pw[i, a] += (Rw[i, a, 0] * ax + Rw[i, a, 1] * ay + Rw[i, a, 2] * az) * qi
-        else:  # Rodrigues: Rw[i] ← Rw[i] · exp([a]× q)
-            cq, sq = math.cos(qi), math.sin(qi)
-            vq = 1.0 - cq
-            e00 = cq + ax * ax * vq
-            e01 = ax * ay * vq - az * sq
-            e02 = ax * az * vq + ay * sq
-            e10 = ay * ax * vq + az * sq
-            e11 = cq + ay * ay * vq
-            e12 = ay * az * vq - ax * sq
-            e20 = az * ax * vq - ay * sq
-            e21 = az * ay * vq + ax * sq
-            e22 = cq + az * az * vq
-            for a in range(3):
-                b0, b1, b2 = Rw[i, a, 0], Rw[i, a, 1], Rw[i, a, 2]
-                Rw[i, a, 0] = b0 * e00 + b1 * e10 + b2 * e20
-                Rw[i, a, 1] = b0 * e01 + b1 * e11 + b2 * e21
-                Rw[i, a, 2] = b0 * e02 + b1 * e12 + b2 * e22
-    L = Rw[n - 1]
-    for a in range(3):
-        for c in range(3):
-            T[a, c] = L[a, 0] * tool_R[0, c] + L[a, 1] * tool_R[1, c] + L[a, 2] * tool_R[2, c]
-        T[a, 3] = pw[n - 1, a] + L[a, 0] * tool_p[0] + L[a, 1] * tool_p[1] + L[a, 2] * tool_p[2]
-    T[3, 0] = 0.0
-    T[3, 1] = 0.0
-    T[3, 2] = 0.0
-    T[3, 3] = 1.0
-    ox, oy, oz = T[0, 3], T[1, 3], T[2, 3]
-    for i in range(n):
-        ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
-        wx = Rw[i, 0, 0] * ax + Rw[i, 0, 1] * ay + Rw[i, 0, 2] * az
-        wy = Rw[i, 1, 0] * ax + Rw[i, 1, 1] * ay + Rw[i, 1, 2] * az
-        wz = Rw[i, 2, 0] * ax + Rw[i, 2, 1] * ay + Rw[i, 2, 2] * az
-        if prismatic[i]:
-            J[0, i], J[1, i], J[2, i] = wx, wy, wz
-            J[3, i], J[4, i], J[5, i] = 0.0, 0.0, 0.0
-        else:
-            dx, dy, dz = ox - pw[i, 0], oy - pw[i, 1], oz - pw[i, 2]
-            J[0, i] = wy * dz - wz * dy
-            J[1, i] = wz * dx - wx * dz
-            J[2, i] = wx * dy - wy * dx
-            J[3, i], J[4, i], J[5, i] = wx, wy, wz
 
 
 def z_chain(

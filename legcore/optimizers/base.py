@@ -144,6 +144,8 @@ class Algorithm(ABC):
         self._pending: np.ndarray | None = None
         self._stop_reason: str | None = None
         self._inc: tuple[np.ndarray, np.ndarray, float] | None = None
+        # the current front, computed once per generation (best() and front() both need it)
+        self._front_memo: tuple[np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------------ public API
     @property
@@ -200,6 +202,7 @@ class Algorithm(ABC):
         self._pending = None
         self._stop_reason = None
         self._inc = None
+        self._front_memo = None
         self._setup()
         return self
 
@@ -230,6 +233,7 @@ class Algorithm(ABC):
         self._n_evals += X.shape[0]
         self._update_incumbent(X, F, cv)
         self._tell(X, F, cv)
+        self._front_memo = None
 
     def best(self) -> tuple[np.ndarray, np.ndarray, float]:
         """``(x, f, cv)`` of the best solution so far.
@@ -255,7 +259,9 @@ class Algorithm(ABC):
         """
         problem = self.problem
         if problem.n_obj > 1:
-            X, F = self._front()
+            if self._front_memo is None:
+                self._front_memo = self._front()
+            X, F = self._front_memo
             return X.copy(), F.copy()
         if self._inc is not None and self._inc[2] <= 0.0:
             return self._inc[0][None, :].copy(), self._inc[1][None, :].copy()
@@ -310,6 +316,7 @@ class Algorithm(ABC):
                 raise ValueError(f"state: problem {key} differs "
                                  f"(saved {dims[key]}, here {getattr(problem, key)})")
         self._rng = _rng_from_state(state["rng"])
+        self._front_memo = None
         self._generation = int(state["generation"])
         self._n_evals = int(state["n_evals"])
         pending = state["pending"]

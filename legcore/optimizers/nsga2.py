@@ -110,7 +110,6 @@ class NSGA2(Algorithm):
         self._cv = np.zeros(0)
         self._rank = np.zeros(0, dtype=np.int64)
         self._crowd = np.zeros(0)
-        self._front_cache: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def population(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -124,7 +123,6 @@ class NSGA2(Algorithm):
         self._cv = np.zeros(0)
         self._rank = np.zeros(0, dtype=np.int64)
         self._crowd = np.zeros(0)
-        self._front_cache = None
 
     def _tournament(self, n: int) -> np.ndarray:
         """``n`` binary-tournament winners; contestants paired from random permutations."""
@@ -186,18 +184,14 @@ class NSGA2(Algorithm):
             rank = rank[keep]
             crowd = crowding_distance(F, rank)
         self._X, self._F, self._cv, self._rank, self._crowd = X, F, cv, rank, crowd
-        self._front_cache = None
 
     def _front(self) -> tuple[np.ndarray, np.ndarray]:
-        if self._front_cache is not None:  # best() and front() both ask once per generation
-            return self._front_cache
         sel = (self._rank == 0) & (self._cv <= 0.0)
         X, F = self._X[sel], self._F[sel]
         if F.shape[0] > 0:
             _, first = np.unique(F, axis=0, return_index=True)
             first = np.sort(first)
             X, F = X[first], F[first]
-        self._front_cache = (X, F)
         return X, F
 
     def _get_state(self) -> dict[str, Any]:
@@ -211,4 +205,3 @@ class NSGA2(Algorithm):
         self._cv = np.asarray(data["cv"], dtype=float).copy()
         self._rank = np.asarray(data["rank"], dtype=np.int64).copy()
         self._crowd = np.asarray(data["crowd"], dtype=float).copy()
-        self._front_cache = None

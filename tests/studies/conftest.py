@@ -21,7 +21,7 @@ import yaml
 
 from legcore.robots import LeggedRobot, Robot, build_any_robot
 from services.spec_files import inline_robot_files
-from tests.robot_files import ERD_URDF, erd_robots_dir
+from tests.robot_files import ERD_URDF, erd_robots_dir, require_erd
 
 ROOT = Path(__file__).resolve().parents[2]
 PRESETS = ROOT / "examples" / "presets"
@@ -44,15 +44,10 @@ def _urdf(file_key: str) -> str:
     return (root / ERD_URDF[file_key]).read_text()
 
 
-def _require_erd() -> None:
-    if erd_robots_dir() is None:
-        pytest.skip("example-robot-data is not installed (dev dependency, see pyproject.toml)")
-
-
 @pytest.fixture(scope="session")
 def robot_spec() -> Callable[[str], dict[str, Any]]:
     """``robot_spec("go1")`` → the inline URDF robot spec of a matrix robot (a new dict)."""
-    _require_erd()
+    require_erd()
 
     def make(name: str) -> dict[str, Any]:
         file_key, extra = MATRIX_ROBOTS[name]
@@ -70,7 +65,7 @@ def _built(name: str) -> Robot | LeggedRobot:
 @pytest.fixture(scope="session")
 def built_robot() -> Callable[[str], Robot | LeggedRobot]:
     """``built_robot("solo12")`` → the built model of a matrix robot (cached)."""
-    _require_erd()
+    require_erd()
     return _built
 
 
@@ -78,9 +73,7 @@ def built_robot() -> Callable[[str], Robot | LeggedRobot]:
 def preset() -> Callable[[str], dict[str, Any]]:
     """``preset("quadruped_gait_go1")`` → ``examples/presets/<name>.yaml`` as a job spec, its
     ``robot.urdf_file`` read from example-robot-data (as ``legopt run`` would from a copy)."""
-    _require_erd()
-    root = erd_robots_dir()
-    assert root is not None
+    root = require_erd()
 
     def load(name: str) -> dict[str, Any]:
         data = yaml.safe_load((PRESETS / f"{name}.yaml").read_text())

@@ -24,7 +24,7 @@ import pytest
 
 from services.client import TERMINAL, ApiError
 from tests.integration.stack import ROOT, Stack, embedded_stack
-from tests.robot_files import ERD_URDF, erd_robots_dir
+from tests.robot_files import ERD_URDF, erd_robots_dir, require_erd
 
 pytestmark = pytest.mark.integration
 
@@ -48,8 +48,7 @@ def _install_plugin(tmp: Path) -> Path:
 
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Stack]:
-    if erd_robots_dir() is None:
-        pytest.skip("example-robot-data is not installed (dev dependency)")
+    require_erd()
     tmp = tmp_path_factory.mktemp("studies-stack")
     site = _install_plugin(tmp)
     with embedded_stack(tmp, {"PYTHONPATH": os.pathsep.join([str(site), str(ROOT)])}) as st:

@@ -126,11 +126,12 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
             ]
             best_index = points[dist.index(min(dist))].index
     marks = [m for b in baselines if (m := _baseline_mark(b, names)) is not None]
+    objective_quantities = quantities(names, kind)
     metrics = sorted((result.metrics or {}).keys()) if result is not None else []
     return FrontOut(
         job_id=job.id,
         status=job.status,
-        objectives=quantities(names, kind),
+        objectives=objective_quantities,
         variables=[
             Quantity(name=f"x{i + 1}", label=f"x{i + 1}", unit="", axis=f"x{i + 1}")
             for i in range(n_var)
@@ -147,15 +148,14 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
         best_index=best_index,
         baselines=marks,
         hypervolume_ref=ref,
-        paper=paper_numbers(spec, names, kind),
+        paper=paper_numbers(spec, objective_quantities, kind),
     )
 
 
-def paper_numbers(spec: Any, names: list[str], kind: str | None) -> PaperOut | None:
+def paper_numbers(spec: Any, objectives: list[Quantity], kind: str | None) -> PaperOut | None:
     """The paper's numbers for the job's case: per metric its start and optimum, and on the
     front its start / optimum where it printed every objective (none when an objective is
     maximised: the front holds what the optimiser minimises)."""
-    from legcore.problems.metric_names import metric_name
     from services.paper_numbers import paper_entry
 
     entry = paper_entry(spec if isinstance(spec, dict) else None)
@@ -164,7 +164,7 @@ def paper_numbers(spec: Any, names: list[str], kind: str | None) -> PaperOut | N
     rows = {r.metric: r for r in entry.rows}
     metrics = {
         r.metric: PaperValue(
-            symbol=r.paper or metric_name(r.metric, kind).paper,
+            symbol=r.symbol(kind),
             start=r.start,
             optimum=r.optimum,
             note=" ".join(r.note.split()),
@@ -172,7 +172,8 @@ def paper_numbers(spec: Any, names: list[str], kind: str | None) -> PaperOut | N
         for r in entry.rows
         if r.start is not None or r.optimum is not None
     }
-    senses = [q.sense for q in quantities(names, kind)]
+    names = [q.name for q in objectives]
+    senses = [q.sense for q in objectives]
     marks = []
     for label, pick in (("paper's start", "start"), ("paper's optimum", "optimum")):
         values = [getattr(rows[n], pick) if n in rows else None for n in names]

@@ -8,7 +8,7 @@ from functools import cache
 
 import pytest
 
-from tests.robot_files import ERD_URDF, erd_robots_dir
+from tests.robot_files import ERD_URDF, erd_robots_dir, require_erd
 
 
 @cache
@@ -21,6 +21,5 @@ def _read(name: str) -> str:
 @pytest.fixture(scope="session")
 def erd_urdf() -> Callable[[str], str]:
     """``erd_urdf("go1")`` → the URDF text of that robot (skips without the wheel)."""
-    if erd_robots_dir() is None:
-        pytest.skip("example-robot-data is not installed (dev dependency, see pyproject.toml)")
+    require_erd()
     return _read

@@ -120,6 +120,7 @@ def test_jobs_page_filters_sorts_searches_and_pages(env: dict[str, Any]) -> None
 
 def test_labels_are_written_once_for_new_jobs(env: dict[str, Any]) -> None:
     ctx = env["ctx"]
+    env["client"].get(f"{API}/dashboard/jobs", headers=env["alice"])  # reading writes them
     with ctx.read() as s:
         key_id = repo.get_job(s, env["job"]).owner_key_id  # type: ignore[union-attr]
         assert not dq.missing_labels(s, key_id)
@@ -296,12 +297,14 @@ def test_job_tags_are_listed_and_filter_the_jobs(env: dict[str, Any]) -> None:
 
 def test_paper_solution_is_marked_where_every_objective_was_printed() -> None:
     """Seed 002's paper solution a has all three objectives: one mark on the 3-D front."""
+    from services.api.dashboard_schemas import quantities
     from services.api.routes.job_views import paper_numbers
 
     names = ["f1_beta1", "f2_beta5", "f3_perimeter"]
-    paper = paper_numbers({"problem": {"kind": "hexapod_workspace"}}, names, "hexapod_workspace")
+    kind = "hexapod_workspace"
+    paper = paper_numbers({"problem": {"kind": kind}}, quantities(names, kind), kind)
     assert paper is not None and paper.source.startswith("Domínguez")
     assert [(m.label, m.objectives) for m in paper.marks] == [
         ("paper's optimum", [0.0001, 0.0009, 0.000764])
     ]
-    assert paper_numbers({"problem": {"kind": "nothing"}}, names, None) is None
+    assert paper_numbers({"problem": {"kind": "nothing"}}, quantities(names), None) is None
