@@ -20,7 +20,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial.distance import cdist
 
-from legcore.pareto_kernels import crowding_kernel, pareto_ranks_kernel
+from legcore.pareto_kernels import (
+    constrained_ranks_kernel,
+    crowding_kernel,
+    knee_kernel,
+    pareto_ranks_kernel,
+)
 
 __all__ = [
     "covers",
@@ -93,28 +98,18 @@ def non_dominated_sort(F: ArrayLike, cv: ArrayLike | None = None) -> np.ndarray:
     Returns:
         ``(n,)`` int64 ranks.
     """
-    F = _as_F(F)
+    F = np.ascontiguousarray(_as_F(F))
     n = F.shape[0]
     ranks = np.zeros(n, dtype=np.int64)
     if n == 0:
         return ranks
     if cv is None:
-        feasible = np.ones(n, dtype=bool)
-    else:
-        cv = np.asarray(cv, dtype=float)
-        if cv.shape != (n,):
-            raise ValueError(f"cv: expected shape ({n},), got {cv.shape}")
-        feasible = cv <= 0.0
-    idx = np.flatnonzero(feasible)
-    n_fronts = 0
-    if idx.size:
-        sub = np.empty(idx.size, dtype=np.int64)
-        n_fronts = pareto_ranks_kernel(np.ascontiguousarray(F[idx]), sub)
-        ranks[idx] = sub
-    if cv is not None and not feasible.all():
-        inf_idx = np.flatnonzero(~feasible)
-        _, dense = np.unique(cv[inf_idx], return_inverse=True)
-        ranks[inf_idx] = n_fronts + dense
+        pareto_ranks_kernel(F, ranks)
+        return ranks
+    cv = np.ascontiguousarray(cv, dtype=float)
+    if cv.shape != (n,):
+        raise ValueError(f"cv: expected shape ({n},), got {cv.shape}")
+    constrained_ranks_kernel(F, cv, ranks)
     return ranks
 
 
@@ -233,27 +228,7 @@ def knee_point(F: ArrayLike) -> int:
 
     Dominated points in ``F`` are allowed but the result is only meaningful for a front.
     """
-    F = _as_F(F)
-    n, m = F.shape
-    if n == 0:
+    F = np.ascontiguousarray(_as_F(F))
+    if F.shape[0] == 0:
         raise ValueError("F: cannot take the knee of an empty set")
-    if n == 1:
-        return 0
-    ideal, nadir = F.min(axis=0), F.max(axis=0)
-    span = np.where(nadir > ideal, nadir - ideal, 1.0)
-    Z = (F - ideal) / span
-    total = Z.sum(axis=1)
-    extremes = np.array([np.lexsort((total, Z[:, k]))[0] for k in range(m)])
-    fallback = int(np.argmin(np.linalg.norm(Z, axis=1)))
-    if np.unique(extremes).size < m:
-        return fallback
-    E = Z[extremes]
-    try:
-        normal = np.linalg.solve(E, np.ones(m))  # plane: normal . z = 1
-    except np.linalg.LinAlgError:
-        return fallback
-    norm = float(np.linalg.norm(normal))
-    if not np.isfinite(norm) or norm == 0.0 or np.any(normal <= 0):
-        return fallback
-    dist = (1.0 - Z @ normal) / norm  # > 0 on the ideal side
-    return int(np.argmax(dist))
+    return int(knee_kernel(F))

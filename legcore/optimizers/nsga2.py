@@ -8,13 +8,16 @@ Per generation:
    crowding distance (pymoo's ``comp_by_dom_and_crowding``; Deb 2002 compares ranks instead —
    dominance between the two contestants kept ZDT2 runs from collapsing in our tests).
 2. **Variation**: SBX (``eta_c = 15``, probability 0.9 per pair, 0.5 per variable) and polynomial
-   mutation (``eta_m = 20``, probability ``1 / n_var`` per variable) — pymoo's NSGA2 defaults.
+   mutation (``eta_m = 20``, probability ``1 / n_var`` per variable) — Deb 2002's settings and
+   pymoo's NSGA2 defaults, except that pymoo mutates an offspring only with probability 0.9
+   (``prob_mutant=0.9`` here).
    Integer-coded problems are rounded to the grid.
 3. **Evaluation** of the ``pop_size`` offspring as one batch.
 4. **Survival**: parents and offspring merged, sorted into fronts (Deb's constrained domination:
    feasible first, infeasible by increasing violation), fronts added in order, the last one
    truncated by decreasing crowding distance (computed once on that front; ties keep the
-   earlier index).
+   earlier index). The survivors keep the crowding distance of their whole front for the next
+   tournament (Deb 2002; pymoo does the same).
 
 Offspring identical to a parent or to an earlier offspring are discarded and re-drawn (up to 10
 rounds), as pymoo does; duplicates would let a run collapse onto clones (ZDT2). The front
@@ -25,51 +28,21 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-import numba
 import numpy as np
 
-from legcore.metrics import crowding_distance, non_dominated_sort
 from legcore.optimizers.base import Algorithm
+from legcore.optimizers.nsga2_kernels import (
+    novel_rows_kernel,
+    survivors_kernel,
+    tournament_kernel,
+    unique_rows_kernel,
+)
 from legcore.optimizers.operators import polynomial_mutation, sbx
 from legcore.optimizers.params import check_float, check_int, check_optional_float
 
 __all__ = ["NSGA2"]
 
 _MAX_ROUNDS = 10
-
-
-@numba.njit(cache=True, nogil=True)
-def _tournament_kernel(
-    perm: np.ndarray, F: np.ndarray, cv: np.ndarray, crowd: np.ndarray, out: np.ndarray
-) -> None:  # pragma: no cover - compiled
-    """Winner of each pair ``(perm[2k], perm[2k+1])``: the lower violation if either violates,
-    else the Pareto-dominating one, else the larger crowding distance (ties: the first)."""
-    m = F.shape[1]
-    for k in range(out.shape[0]):
-        a = perm[2 * k]
-        b = perm[2 * k + 1]
-        if cv[a] > 0 or cv[b] > 0:
-            out[k] = a if cv[a] <= cv[b] else b
-            continue
-        a_le = True  # F[a] <= F[b] everywhere
-        b_le = True
-        a_lt = False  # F[a] < F[b] somewhere
-        b_lt = False
-        for j in range(m):
-            fa = F[a, j]
-            fb = F[b, j]
-            if fa > fb:
-                a_le = False
-                b_lt = True
-            elif fa < fb:
-                b_le = False
-                a_lt = True
-            elif not (fa == fb):  # NaN: neither side is <= the other
-                a_le = False
-                b_le = False
-        a_dom = a_le and a_lt
-        b_dom = b_le and b_lt
-        out[k] = a if a_dom or (not b_dom and crowd[a] >= crowd[b]) else b
 
 
 class NSGA2(Algorithm):
@@ -82,6 +55,8 @@ class NSGA2(Algorithm):
         prob_var_crossover: per-variable SBX probability within a crossed pair. Default 0.5.
         eta_m: polynomial mutation distribution index. Default 20.
         prob_mutation: per-variable mutation probability; ``None`` = ``1 / n_var``.
+        prob_mutant: probability that an offspring is mutated at all. Default 1 (Deb 2002);
+            pymoo's NSGA2 uses 0.9.
     """
 
     kind: ClassVar[str] = "nsga2"
@@ -95,6 +70,7 @@ class NSGA2(Algorithm):
         prob_var_crossover: float = 0.5,
         eta_m: float = 20.0,
         prob_mutation: float | None = None,
+        prob_mutant: float = 1.0,
     ) -> None:
         super().__init__()
         self._params = {
@@ -104,6 +80,7 @@ class NSGA2(Algorithm):
             "prob_var_crossover": check_float("prob_var_crossover", prob_var_crossover, 0.0, 1.0),
             "eta_m": check_float("eta_m", eta_m, 0.0, low_open=True),
             "prob_mutation": check_optional_float("prob_mutation", prob_mutation, 0.0, high=1.0),
+            "prob_mutant": check_float("prob_mutant", prob_mutant, 0.0, 1.0),
         }
         self._X = np.zeros((0, 0))
         self._F = np.zeros((0, 0))
@@ -130,7 +107,7 @@ class NSGA2(Algorithm):
         n_perm = -(-2 * n // size)
         perm = np.concatenate([self._rng.permutation(size) for _ in range(n_perm)])[: 2 * n]
         winners = np.empty(n, dtype=np.int64)
-        _tournament_kernel(perm, self._F, self._cv, self._crowd, winners)
+        tournament_kernel(perm, self._F, self._cv, self._crowd, winners)
         return winners
 
     def _offspring(self, n: int) -> np.ndarray:
@@ -143,56 +120,54 @@ class NSGA2(Algorithm):
         children = np.empty((2 * n_pairs, p.n_var))
         children[0::2], children[1::2] = c1, c2
         Y = polynomial_mutation(children[:n], p.xl, p.xu, self._rng, eta=self._params["eta_m"],
-                                prob_var=self._params["prob_mutation"])
+                                prob_var=self._params["prob_mutation"],
+                                prob=self._params["prob_mutant"])
         return p.snap(Y)
 
     def _ask(self) -> np.ndarray:
         n = self._params["pop_size"]
         if self._X.shape[0] == 0:
             return self._random_population(n)
-        # offspring identical to a parent or to another offspring are discarded and re-drawn
-        # (up to _MAX_ROUNDS rounds; then duplicates fill the batch) as pymoo does
-        seen = {row.tobytes() for row in self._X}
+        # offspring identical (bitwise) to a parent or to another offspring are discarded and
+        # re-drawn (up to _MAX_ROUNDS rounds; then duplicates fill the batch) as pymoo does
+        parents = np.ascontiguousarray(self._X).view(np.int64)
+        pool = np.empty((parents.shape[0] + _MAX_ROUNDS * n, parents.shape[1]), dtype=np.int64)
+        pool[: parents.shape[0]] = parents
+        n_pool = parents.shape[0]
         kept: list[np.ndarray] = []
         spare: list[np.ndarray] = []
+        n_kept = 0
         for _ in range(_MAX_ROUNDS):
-            for y in self._offspring(n):
-                key = y.tobytes()
-                if key in seen:
-                    spare.append(y)
-                else:
-                    seen.add(key)
-                    kept.append(y)
-            if len(kept) >= n:
+            Y = np.ascontiguousarray(self._offspring(n))
+            novel = np.empty(n, dtype=np.bool_)
+            n_pool = novel_rows_kernel(pool, n_pool, Y.view(np.int64), novel)
+            kept.append(Y[novel])
+            spare.append(Y[~novel])
+            n_kept += kept[-1].shape[0]
+            if n_kept >= n:
                 break
-        rows = (kept + spare)[:n]
-        return np.array(rows)
+        return np.concatenate(kept + spare)[:n]
 
     def _tell(self, X: np.ndarray, F: np.ndarray, cv: np.ndarray) -> None:
         X = np.vstack([self._X, X])
-        F = np.vstack([self._F, F])
+        F = np.ascontiguousarray(np.vstack([self._F, F]))
         cv = np.concatenate([self._cv, cv])
-        n = self._params["pop_size"]
-        rank = non_dominated_sort(F, cv)
-        crowd = crowding_distance(F, rank)
-        if X.shape[0] > n:
-            order = np.lexsort((np.arange(rank.size), -crowd, rank))
-            keep = np.sort(order[:n])
-            X, F, cv = X[keep], F[keep], cv[keep]
-            # ranks are unchanged by removing worse fronts / part of the last front;
-            # crowding is recomputed on the survivors for the next tournament.
-            rank = rank[keep]
-            crowd = crowding_distance(F, rank)
+        keep = np.empty(X.shape[0], dtype=np.bool_)
+        rank = np.empty(X.shape[0], dtype=np.int64)
+        crowd = np.empty(X.shape[0])
+        survivors_kernel(F, cv, self._params["pop_size"], keep, rank, crowd)
+        if not keep.all():
+            # ranks are unchanged by removing worse fronts / part of the last front; crowding
+            # distances stay those of the whole front (Deb 2002, and pymoo)
+            X, F, cv, rank, crowd = X[keep], F[keep], cv[keep], rank[keep], crowd[keep]
         self._X, self._F, self._cv, self._rank, self._crowd = X, F, cv, rank, crowd
 
     def _front(self) -> tuple[np.ndarray, np.ndarray]:
         sel = (self._rank == 0) & (self._cv <= 0.0)
         X, F = self._X[sel], self._F[sel]
-        if F.shape[0] > 0:
-            _, first = np.unique(F, axis=0, return_index=True)
-            first = np.sort(first)
-            X, F = X[first], F[first]
-        return X, F
+        first = np.empty(F.shape[0], dtype=np.bool_)
+        unique_rows_kernel(F, first)  # equal objective vectors: the first one only
+        return X[first], F[first]
 
     def _get_state(self) -> dict[str, Any]:
         return {"X": self._X, "F": self._F, "cv": self._cv, "rank": self._rank,

@@ -3,7 +3,8 @@
 - ``sbx``: simulated binary crossover, bounded form (Deb & Agrawal 1995; as in Deb's NSGA-II
   code and pymoo's ``SBX``): per pair with probability ``prob``, per variable with probability
   ``prob_var``; children swapped per variable with probability 1/2.
-- ``polynomial_mutation``: Deb's bounded polynomial mutation (pymoo's ``PM``), each variable with
+- ``polynomial_mutation``: Deb's bounded polynomial mutation (pymoo's ``PM``): each row with
+  probability ``prob`` (pymoo's NSGA-II: 0.9; default 1), then each of its variables with
   probability ``prob_var`` (default ``1 / n_var``).
 
 All operators draw a fixed number of random numbers per call (independent of the data), which
@@ -100,8 +101,8 @@ def sbx(
 
 @numba.njit(cache=True, nogil=True)
 def _pm_kernel(
-    X: np.ndarray, xl: np.ndarray, xu: np.ndarray, r_mut: np.ndarray, r: np.ndarray,
-    eta: float, p: float, Y: np.ndarray,
+    X: np.ndarray, xl: np.ndarray, xu: np.ndarray, rows: np.ndarray, r_mut: np.ndarray,
+    r: np.ndarray, eta: float, p: float, Y: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
     n, d = X.shape
     pw = 1.0 / (eta + 1.0)
@@ -109,7 +110,7 @@ def _pm_kernel(
         for j in range(d):
             x = X[i, j]
             span = xu[j] - xl[j]
-            if not (r_mut[i, j] < p and span > 0):
+            if not (rows[i] and r_mut[i, j] < p and span > 0):
                 Y[i, j] = x
                 continue
             ri = r[i, j]
@@ -132,14 +133,18 @@ def polynomial_mutation(
     *,
     eta: float = 20.0,
     prob_var: float | None = None,
+    prob: float = 1.0,
 ) -> np.ndarray:
-    """Mutate each variable with probability ``prob_var`` (default ``1 / n_var``)."""
+    """Mutate each row with probability ``prob``, and in it each variable with probability
+    ``prob_var`` (default ``1 / n_var``). ``prob < 1`` draws ``n`` more numbers (after the
+    others); ``prob = 1`` draws none."""
     n, d = X.shape
     p = 1.0 / d if prob_var is None else prob_var
     r_mut = rng.random((n, d))
     r = rng.random((n, d))
+    rows = rng.random(n) < prob if prob < 1.0 else np.ones(n, dtype=np.bool_)
     Y = np.empty((n, d))
-    _pm_kernel(np.ascontiguousarray(X, dtype=float), _row(xl, d), _row(xu, d), r_mut, r,
+    _pm_kernel(np.ascontiguousarray(X, dtype=float), _row(xl, d), _row(xu, d), rows, r_mut, r,
                float(eta), float(p), Y)  # fmt: skip
     return Y
 

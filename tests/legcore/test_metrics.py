@@ -79,6 +79,31 @@ def test_crowding_distance_equals_the_numpy_formulation(m: int, seed: int) -> No
         np.testing.assert_array_equal(crowding_distance(F), _crowding_reference(F, 0 * ranks))
 
 
+def _constrained_ranks_reference(F: np.ndarray, cv: np.ndarray) -> np.ndarray:
+    """The numpy formulation the compiled kernel replaced: feasible rows by Pareto fronts,
+    infeasible ones after them by dense rank of the violation."""
+    ranks = np.zeros(len(F), dtype=np.int64)
+    feasible = cv <= 0.0
+    n_fronts = 0
+    if feasible.any():
+        ranks[feasible] = _brute_force_ranks(F[feasible])
+        n_fronts = int(ranks[feasible].max()) + 1
+    if not feasible.all():
+        _, dense = np.unique(cv[~feasible], return_inverse=True)
+        ranks[~feasible] = n_fronts + dense
+    return ranks
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_constrained_sort_equals_the_numpy_formulation(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    F = np.round(rng.random((90, 3)), 1)
+    for share in (0.0, 0.3, 1.0):
+        cv = np.where(rng.random(len(F)) < share, rng.integers(1, 5, len(F)), 0).astype(float)
+        np.testing.assert_array_equal(non_dominated_sort(F, cv),
+                                      _constrained_ranks_reference(F, cv))  # fmt: skip
+
+
 def test_dominance_matrix_small_case() -> None:
     F = np.array([[1.0, 1.0], [1.0, 2.0], [1.0, 1.0], [0.0, 3.0]])
     D = dominance_matrix(F)
@@ -177,3 +202,38 @@ def test_knee_point_degenerate_inputs() -> None:
     assert knee_point(same) in (0, 1)
     with pytest.raises(ValueError, match="F"):
         knee_point(np.zeros((0, 2)))
+
+
+def _knee_reference(F: np.ndarray) -> int:
+    """The numpy formulation the compiled kernel replaced."""
+    n, m = F.shape
+    if n == 1:
+        return 0
+    ideal, nadir = F.min(axis=0), F.max(axis=0)
+    span = np.where(nadir > ideal, nadir - ideal, 1.0)
+    Z = (F - ideal) / span
+    total = Z.sum(axis=1)
+    extremes = np.array([np.lexsort((total, Z[:, k]))[0] for k in range(m)])
+    fallback = int(np.argmin(np.linalg.norm(Z, axis=1)))
+    if np.unique(extremes).size < m:
+        return fallback
+    try:
+        normal = np.linalg.solve(Z[extremes], np.ones(m))
+    except np.linalg.LinAlgError:
+        return fallback
+    norm = float(np.linalg.norm(normal))
+    if not np.isfinite(norm) or norm == 0.0 or np.any(normal <= 0):
+        return fallback
+    return int(np.argmax((1.0 - Z @ normal) / norm))
+
+
+@pytest.mark.parametrize("m", [2, 3, 4])
+def test_knee_point_equals_the_numpy_formulation(m: int) -> None:
+    rng = np.random.default_rng(m)
+    for trial in range(60):
+        n = int(rng.integers(1, 40))
+        W = rng.random((n, m)) + 1e-3
+        F = 1.0 - W / np.linalg.norm(W, axis=1, keepdims=True) if trial % 3 else W
+        if trial % 4 == 0:
+            F = np.round(F, 1)  # ties, repeated extremes, singular planes
+        assert knee_point(F) == _knee_reference(F), (trial, F)

@@ -43,13 +43,14 @@ def sbx_reference(P1, P2, xl, xu, rng, *, eta=15.0, prob=0.9, prob_var=0.5):
             np.where(cross, np.where(swap, c1, c2), P2))  # fmt: skip
 
 
-def pm_reference(X, xl, xu, rng, *, eta=20.0, prob_var=None):
+def pm_reference(X, xl, xu, rng, *, eta=20.0, prob_var=None, prob=1.0):
     n, d = X.shape
     p = 1.0 / d if prob_var is None else prob_var
     r_mut = rng.random((n, d))
     r = rng.random((n, d))
+    rows = rng.random(n) < prob if prob < 1.0 else np.ones(n, dtype=bool)
     span = xu - xl
-    mut = (r_mut < p) & (span > 0)[None, :]
+    mut = (r_mut < p) & (span > 0)[None, :] & rows[:, None]
     safe = np.where(span > 0, span, 1.0)
     d1 = (X - xl) / safe
     d2 = (xu - X) / safe
@@ -79,29 +80,9 @@ def test_compiled_operators_equal_the_numpy_formulation(seed: int) -> None:
         np.testing.assert_allclose(got[1], want[1], rtol=1e-14, atol=1e-15)
         np.testing.assert_array_equal(got[0] == P1, want[0] == P1)  # the same genes crossed
         assert a.random() == b.random()  # the same draws were taken
-        for pv in (None, 0.5, 1.0):
-            got_m = polynomial_mutation(P1, xl, xu, a, eta=eta, prob_var=pv)
-            want_m = pm_reference(P1, xl, xu, b, eta=eta, prob_var=pv)
+        for pv, pr in ((None, 1.0), (0.5, 0.9), (1.0, 0.3)):
+            got_m = polynomial_mutation(P1, xl, xu, a, eta=eta, prob_var=pv, prob=pr)
+            want_m = pm_reference(P1, xl, xu, b, eta=eta, prob_var=pv, prob=pr)
             np.testing.assert_allclose(got_m, want_m, rtol=1e-14, atol=1e-15)
             np.testing.assert_array_equal(got_m == P1, want_m == P1)  # the same genes mutated
             assert np.all((got_m >= xl) & (got_m <= xu))
-
-
-def test_tournament_kernel_equals_the_numpy_formulation() -> None:
-    from legcore.optimizers.nsga2 import _tournament_kernel
-
-    rng = np.random.default_rng(3)
-    n = 60
-    F = np.round(rng.random((n, 3)), 1)  # ties and duplicates
-    cv = np.where(rng.random(n) < 0.3, rng.integers(0, 3, n), 0).astype(float)
-    crowd = np.where(rng.random(n) < 0.2, np.inf, np.round(rng.random(n), 1))
-    perm = np.concatenate([rng.permutation(n) for _ in range(4)])
-    a, b = perm[0::2], perm[1::2]
-    Fa, Fb = F[a], F[b]
-    a_dom = np.all(Fa <= Fb, axis=1) & np.any(Fa < Fb, axis=1)
-    b_dom = np.all(Fb <= Fa, axis=1) & np.any(Fb < Fa, axis=1)
-    by_pareto = a_dom | (~b_dom & (crowd[a] >= crowd[b]))
-    want = np.where(np.where((cv[a] > 0) | (cv[b] > 0), cv[a] <= cv[b], by_pareto), a, b)
-    got = np.empty(len(a), dtype=np.int64)
-    _tournament_kernel(perm, F, cv, crowd, got)
-    np.testing.assert_array_equal(got, want)
