@@ -53,7 +53,9 @@ def tournament_kernel(
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _same_row(A: NDArray[np.int64], i: int, B: NDArray[np.int64], j: int) -> bool:  # pragma: no cover
+def _same_row(
+    A: NDArray[np.int64], i: int, B: NDArray[np.int64], j: int
+) -> bool:  # pragma: no cover
     for k in range(A.shape[1]):
         if A[i, k] != B[j, k]:
             return False
@@ -84,7 +86,9 @@ def novel_rows_kernel(
 
 
 @numba.njit(cache=True, nogil=True)
-def unique_rows_kernel(F: NDArray[np.float64], first: NDArray[np.bool_]) -> None:  # pragma: no cover
+def unique_rows_kernel(
+    F: NDArray[np.float64], first: NDArray[np.bool_]
+) -> None:  # pragma: no cover
     """``first[i]``: row ``i`` of ``F`` equals (``==``, every column) no earlier row."""
     n, m = F.shape
     for i in range(n):

@@ -142,7 +142,7 @@ def polynomial_mutation(
     p = 1.0 / d if prob_var is None else prob_var
     r_mut = rng.random((n, d))
     r = rng.random((n, d))
-    rows = rng.random(n) < prob if prob < 1.0 else np.ones(n, dtype=np.bool_)
+    rows = np.asarray(rng.random(n) < prob) if prob < 1.0 else np.ones(n, dtype=np.bool_)
     Y = np.empty((n, d))
     _pm_kernel(np.ascontiguousarray(X, dtype=float), _row(xl, d), _row(xu, d), rows, r_mut, r,
                float(eta), float(p), Y)  # fmt: skip
