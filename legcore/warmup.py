@@ -7,7 +7,10 @@ of 8 for 1 generation, seed 000's baseline GAs for 1 generation) through the who
 ``legcore.run`` — evaluation, IK of the baselines and placements, decoding — so that every
 ``@numba.njit(cache=True)`` kernel is compiled with the signatures the jobs use and written to
 numba's cache (``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` next to the package). A later
-process loads them instead of compiling. Prints one line per kind and the total time.
+process loads them instead of compiling. Then ``numeric_ik``: the numerical IK that arms without
+a closed form use (URDF arms, 7-DOF; none of the study kinds' default robots needs it), whose
+kernels take the longest to compile (~2 min on the 2-core development machine). Prints one line
+per kind and the total time.
 """
 
 from __future__ import annotations
@@ -39,8 +42,42 @@ def warmup_spec(kind: str, study: Any) -> dict[str, Any]:
     }
 
 
-def warm_up(kinds: list[str] | None = None, *, verbose: bool = True) -> dict[str, float]:
-    """Run the warm-up job of each kind (default: every built-in kind); seconds per kind.
+def warm_numeric_ik() -> None:
+    """The numerical IK on a UR5 (DH, no closed form): pose, tool-axis and position tasks, along
+    a path and per sample (8 targets each)."""
+    import math
+
+    import numpy as np
+
+    from legcore.ik import solve
+    from legcore.kinematics import fk
+    from legcore.robots import build_robot
+
+    h = math.pi / 2
+    d, a, al = (0.089159, 0, 0, 0.10915, 0.09465, 0.0823), (0, -0.425, -0.39225, 0, 0, 0), \
+        (h, 0, 0, h, -h, 0)
+    arm = build_robot({"kind": "dh", "name": "warmup_ur5", "joints": [
+        {"d": d[i], "a": a[i], "alpha": al[i], "q_min": -2 * math.pi, "q_max": 2 * math.pi}
+        for i in range(6)]})  # fmt: skip
+    q = np.array([0.3, -1.2, 1.5, -1.0, 1.2, 0.3]) + 0.1 * np.linspace(0.0, 1.0, 8)[:, None]
+    T = fk(arm, q)
+    targets = {"pose": T, "axis": np.concatenate([T[:, :3, 3], T[:, :3, 2]], axis=1),
+               "position": T[:, :3, 3]}  # fmt: skip
+    for task, target in targets.items():
+        for path in (True, False):
+            solve(arm, target, task, q0=q[0], path=path)
+
+
+#: Warm-ups beside the study kinds (name -> function), run after them by default.
+_EXTRA = {"numeric_ik": warm_numeric_ik}
+
+
+def warm_up(
+    kinds: list[str] | None = None, *, extras: bool = False, verbose: bool = True
+) -> dict[str, float]:
+    """Run the warm-up job of each kind (default: every built-in kind, then with ``extras`` the
+    ``numeric_ik`` warm-up — the command line's default; a worker at start leaves it out: with
+    a cold cache it would hold the worker ~2 min); seconds per kind.
 
     A kind whose job fails is reported (``nan``) and skipped: warming up is best effort.
     """
@@ -49,11 +86,16 @@ def warm_up(kinds: list[str] | None = None, *, verbose: bool = True) -> dict[str
 
     found = studies()
     chosen = kinds if kinds is not None else [k for k in found if k in STUDY_MODULES]
+    if kinds is None and extras:
+        chosen = [*chosen, *_EXTRA]
     out: dict[str, float] = {}
     for kind in chosen:
         t0 = time.perf_counter()
         try:
-            run(warmup_spec(kind, found[kind]))
+            if kind in _EXTRA:
+                _EXTRA[kind]()
+            else:
+                run(warmup_spec(kind, found[kind]))
             out[kind] = time.perf_counter() - t0
         except Exception as exc:  # noqa: BLE001 - best effort, reported
             out[kind] = float("nan")
@@ -67,7 +109,7 @@ def warm_up(kinds: list[str] | None = None, *, verbose: bool = True) -> dict[str
 
 def main(argv: list[str]) -> int:
     t0 = time.perf_counter()
-    times = warm_up(argv or None)
+    times = warm_up(argv or None, extras=True)
     print(f"warmup: {len(times)} kinds in {time.perf_counter() - t0:.1f} s", flush=True)
     return 0 if all(t == t for t in times.values()) else 1
 

@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 RUNNABLE = {"python", "bash", "json", "yaml"}
 #: Seconds one block may take (the slowest run a short optimisation or a service round trip).
-BLOCK_TIMEOUT_S = 120.0
+BLOCK_TIMEOUT_S = 600.0  # a hang guard: a cold numba cache compiles the IK kernels first (~2 min here)
 _NEEDS_SERVICE = re.compile(
     r"\bcurl\b|\blegopt (submit|status|results|cancel|sweep|replay|keys)\b|\$API\b|\$\{API\}"
     r"|environ\[.API.\]"
