@@ -338,7 +338,8 @@ def solve_parsed(
     q0_a = _config(robot, q0, rest_a, "q0")
     lead = batch[:-1] if path else batch
     try:
-        q_init = np.array(np.broadcast_to(q0_a, (*lead, n)), dtype=float).reshape(-1, n)
+        q_init = np.array(np.broadcast_to(q0_a, (*lead, n)), dtype=float, order="C")
+        q_init = q_init.reshape(-1, n)  # a writable C-order copy: one signature of _paths_kernel
     except ValueError:
         raise ValueError(f"q0: shape {q0_a.shape} does not broadcast to {(*lead, n)}") from None
     K = batch[-1] if path else 1
