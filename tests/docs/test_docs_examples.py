@@ -35,8 +35,9 @@ from tests.integration.stack import Stack, embedded_stack
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 RUNNABLE = {"python", "bash", "json", "yaml"}
-#: Seconds one block may take (the slowest run a short optimisation or a service round trip).
-BLOCK_TIMEOUT_S = 600.0  # a hang guard: a cold numba cache compiles the IK kernels first (~2 min here)
+#: Seconds one block may take: a hang guard (the slowest run a short optimisation or a service
+#: round trip, but on a cold numba cache the IK block compiles the numerical IK first, ~1.5 min).
+BLOCK_TIMEOUT_S = 600.0
 _NEEDS_SERVICE = re.compile(
     r"\bcurl\b|\blegopt (submit|status|results|cancel|sweep|replay|keys)\b|\$API\b|\$\{API\}"
     r"|environ\[.API.\]"
