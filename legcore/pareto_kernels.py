@@ -121,6 +121,8 @@ def constrained_ranks_kernel(
     then the infeasible ones by increasing violation (equal violations share a front). Writes
     ``ranks`` (n,); returns the number of fronts."""
     feasible = np.flatnonzero(cv <= 0.0)
+    if feasible.size == F.shape[0]:  # all feasible: Pareto fronts of F itself, no copy
+        return pareto_ranks_kernel(F, ranks)
     n_fronts = 0
     if feasible.size:
         sub = np.empty((feasible.size, F.shape[1]))

@@ -43,29 +43,24 @@ def warmup_spec(kind: str, study: Any) -> dict[str, Any]:
 
 
 def warm_numeric_ik() -> None:
-    """The numerical IK on a UR5 (DH, no closed form): pose, tool-axis and position tasks, along
-    a path and per sample (8 targets each)."""
-    import math
-
+    """The numerical IK (its kernels are the same for every robot) on the catalog PUMA 560 with
+    its closed form bypassed: pose, tool-axis and position tasks, along a path and per sample
+    (8 targets each)."""
     import numpy as np
 
     from legcore.ik import solve
     from legcore.kinematics import fk
-    from legcore.robots import build_robot
+    from legcore.robots import Robot, catalog
 
-    h = math.pi / 2
-    d, a, al = (0.089159, 0, 0, 0.10915, 0.09465, 0.0823), (0, -0.425, -0.39225, 0, 0, 0), \
-        (h, 0, 0, h, -h, 0)
-    arm = build_robot({"kind": "dh", "name": "warmup_ur5", "joints": [
-        {"d": d[i], "a": a[i], "alpha": al[i], "q_min": -2 * math.pi, "q_max": 2 * math.pi}
-        for i in range(6)]})  # fmt: skip
-    q = np.array([0.3, -1.2, 1.5, -1.0, 1.2, 0.3]) + 0.1 * np.linspace(0.0, 1.0, 8)[:, None]
+    arm = catalog.get("puma560")
+    assert isinstance(arm, Robot)
+    q = np.array([0.2, 0.5, -2.0, 0.3, 0.8, 0.2]) + 0.1 * np.linspace(0.0, 1.0, 8)[:, None]
     T = fk(arm, q)
     targets = {"pose": T, "axis": np.concatenate([T[:, :3, 3], T[:, :3, 2]], axis=1),
                "position": T[:, :3, 3]}  # fmt: skip
     for task, target in targets.items():
         for path in (True, False):
-            solve(arm, target, task, q0=q[0], path=path)
+            solve(arm, target, task, q0=q[0], path=path, method="numeric")
 
 
 #: Warm-ups beside the study kinds (name -> function), run after them by default.

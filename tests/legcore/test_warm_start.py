@@ -92,3 +92,25 @@ def test_cache_environment(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> N
     assert "NUMBA_CACHE_DIR" not in settings.cache_environment()  # numba's in-tree cache
     monkeypatch.setattr("services.store.settings.os.access", lambda *_: False)  # an image
     assert settings.cache_environment()["NUMBA_CACHE_DIR"] == str(tmp_path / "cache" / "numba")
+
+
+def test_command_line_warm_up_includes_the_numerical_ik(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`python -m legcore.warmup` (the image build) ends with the numerical IK, which no study
+    kind's default robot compiles; a worker's start-up warm-up (`warm_up()`) leaves it out."""
+    import legcore.warmup as w
+
+    ran: list[str | None] = []
+    monkeypatch.setitem(w._EXTRA, "numeric_ik", lambda: ran.append("numeric_ik"))
+    monkeypatch.setattr("legcore.runner.run", lambda spec: ran.append(spec["problem"]["kind"]))
+    kinds = [k for k in studies() if k in STUDY_MODULES]
+    w.warm_up(verbose=False)
+    assert ran == kinds
+    ran.clear()
+    assert w.main([]) == 0
+    assert ran == [*kinds, "numeric_ik"]
+
+
+def test_numeric_ik_warm_up_runs() -> None:
+    from legcore.warmup import warm_numeric_ik
+
+    warm_numeric_ik()  # the same kernels the numerical IK tests compile (shared cache)
