@@ -86,7 +86,8 @@ def export_front(
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:
-    """A job's final Pareto front: index, objectives, decision variables."""
+    """A job's final Pareto front: index, objectives, each point's metrics (metric.<name>),
+    decision variables."""
     with client(url, key) as c:
         _, full = resolve_id(c, job)
         _save(c, f"/jobs/{full}/front/export", {"format": format.value}, out)
@@ -100,7 +101,8 @@ def export_history(
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:
-    """A job's progress per generation: evaluations, best objectives, hypervolume, time."""
+    """A job's progress per generation: evaluations, best of each objective so far,
+    hypervolume, time (several objectives: each front's minimum and its compromise point)."""
     with client(url, key) as c:
         _, full = resolve_id(c, job)
         _save(c, f"/jobs/{full}/history/export", {"format": format.value}, out)

@@ -31,6 +31,8 @@ _RETRY_STATUS = frozenset({502, 503, 504})
 _FULL_ID = re.compile(r"[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}", re.I)
 #: Page size when listing ids (the API's largest page).
 _PAGE = 1000
+#: Length of a whole id (a UUID): no id starts with anything longer.
+_ID_LENGTH = 36
 
 
 def is_full_id(text: str) -> bool:
@@ -185,12 +187,19 @@ class Client:
 
     def ids_with_prefix(self, collection: str, prefix: str) -> list[str]:
         """The ids of your ``collection`` ("jobs" or "sweeps") that start with ``prefix``
-        (case-insensitive), read page by page from the listing."""
+        (case-insensitive): the listing filtered by the server (``id_prefix``, a range of the
+        primary key's index), so one request unless more than a page of ids share the prefix
+        (a server without the filter sends every id: they are filtered here too)."""
         prefix = prefix.lower()
+        if len(prefix) > _ID_LENGTH:
+            return []
         out: list[str] = []
         offset = 0
         while True:
-            page = self.get(f"/{collection}", limit=_PAGE, offset=offset)
+            params: dict[str, Any] = {"limit": _PAGE, "offset": offset}
+            if prefix:
+                params["id_prefix"] = prefix
+            page = self.get(f"/{collection}", **params)
             items = page.get("items") or []
             out.extend(str(i["id"]) for i in items if str(i["id"]).lower().startswith(prefix))
             offset += len(items)

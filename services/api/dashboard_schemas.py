@@ -111,11 +111,18 @@ class DashboardOptions(BaseModel):
 
 
 class FrontPointOut(BaseModel):
-    """One point of a job's final front: objectives and decision vector by position."""
+    """One point of a job's final front: objectives and decision vector by position, and its
+    metrics by name (labelled in the front's ``metrics``)."""
 
     index: int
     objectives: list[float | None]
     x: list[float | None]
+    metrics: dict[str, float | None] | None = Field(
+        default=None,
+        description="The point's metrics (SI, flags as 0/1), decoded again from its decision "
+        "vector; null while they are being computed (`point_metrics`: pending) or when the "
+        "point cannot be decoded.",
+    )
 
 
 class BaselineMark(BaseModel):
@@ -158,8 +165,17 @@ class FrontOut(BaseModel):
     status: JobStatus
     objectives: list[Quantity]
     variables: list[Quantity]
-    metrics: list[Quantity] = Field(description="Labels of the result's metrics.")
+    metrics: list[Quantity] = Field(
+        description="Labels of the metrics of the result and of the front's points."
+    )
     points: list[FrontPointOut]
+    point_metrics: str = Field(
+        default="ready",
+        description="ready: every point's `metrics` is given; pending: being computed (the "
+        "first request for a large front): ask again after a few seconds; unavailable: the "
+        "job's spec cannot be decoded again (`point_metrics_note` says why).",
+    )
+    point_metrics_note: str | None = None
     best_index: int | None = Field(description="The point closest to the reported optimum.")
     baselines: list[BaselineMark]
     hypervolume_ref: list[float] | None
@@ -194,7 +210,8 @@ class MotionOut(BaseModel):
     source_samples: int = Field(default=0, description="Samples of the motion before thinning.")
     power_kind: str = "mechanical"
     recording_url: str | None = Field(
-        default=None, description="Where this solution's Rerun recording is (points only)."
+        default=None,
+        description="Where this solution's Rerun recording is (front points and baselines).",
     )
 
 

@@ -206,6 +206,17 @@ def page_params(
 
 Pagination = Annotated[PageParams, Depends(page_params)]
 
+#: ``id_prefix`` of the job and sweep lists: what ``legopt status 2253`` resolves, as a range
+#: scan of the primary key (``services.store.id_prefix``).
+IdPrefix = Annotated[
+    str | None,
+    Query(
+        max_length=36,
+        description="Only ids starting with this (case-insensitive; a prefix no id can have "
+        "matches nothing).",
+    ),
+]
+
 __all__ = [
     "API_KEY_HEADER",
     "AdminKey",
@@ -213,6 +224,7 @@ __all__ = [
     "Context",
     "CurrentKey",
     "Enqueue",
+    "IdPrefix",
     "MAX_OFFSET",
     "PageParams",
     "Pagination",

@@ -387,17 +387,40 @@ class GenerationOut(BaseModel):
 
     generation: int
     n_evals: int
-    best: Any
+    best: Any = Field(
+        description="The optimiser's reported solution's objectives: for one objective the "
+        "best so far; for several the compromise (knee) point of the current front, which "
+        "can get worse in any one objective — see `best_so_far`."
+    )
+    best_so_far: list[float | None] | None = Field(
+        default=None,
+        description="The least value of each objective found so far (minimised, as stored): "
+        "the running minimum of `front_min` over the generations up to this one (for one "
+        "objective: `best`); null before the first feasible front.",
+    )
+    front_min: list[float | None] | None = Field(
+        default=None,
+        description="The least value of each objective on this generation's front (null "
+        "without a stored front: one objective, or nothing feasible yet).",
+    )
     hypervolume: float | None = None
     wall_time_s: float
     created_at: datetime
 
     @classmethod
-    def from_record(cls, g: GenerationRecord) -> GenerationOut:
+    def from_record(
+        cls,
+        g: GenerationRecord,
+        *,
+        best_so_far: list[float | None] | None = None,
+        front_min: list[float | None] | None = None,
+    ) -> GenerationOut:
         return cls(
             generation=g.generation,
             n_evals=g.n_evals,
             best=g.best,
+            best_so_far=best_so_far,
+            front_min=front_min,
             hypervolume=g.hypervolume,
             wall_time_s=g.wall_time_s,
             created_at=g.created_at,

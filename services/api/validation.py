@@ -19,6 +19,7 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 
 from legcore.jobspec import JobSpec, parse_job_spec, spec_error_locations
+from legcore.problems.registry import plugin_errors
 from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog, parse_robot_spec
 from legcore.runner import JobSize, job_size
 from services.api.errors import (
@@ -166,7 +167,19 @@ def _job_errors(exc: ValidationError, doc: dict[str, Any], prefix: Loc) -> list[
     """Pydantic errors of a job spec, without the study kind pydantic puts in ``problem``
     locations (``problem.swing_energy.obstacle`` -> ``problem.obstacle``)."""
     locs = [loc for loc, _ in spec_error_locations(exc, doc)]
-    return clean_pydantic_errors(exc, prefix, locs=locs)
+    errors = clean_pydantic_errors(exc, prefix, locs=locs)
+    problem = doc.get("problem")
+    kind = problem.get("kind") if isinstance(problem, dict) else None
+    broken = plugin_errors().get(kind) if isinstance(kind, str) else None
+    if broken is not None:  # not an unknown kind: its plug-in is installed but did not load
+        for err in errors:
+            if err.get("type") == "union_tag_invalid":
+                err["msg"] = (
+                    f"study kind {kind!r} comes from a plug-in that was not loaded ({broken}); "
+                    "fix or reinstall the plug-in and restart the service "
+                    "(GET /api/v1/studies lists plug-in errors)"
+                )
+    return errors
 
 
 _POPULATION_PARAMS = ("pop_size", "n_samples", "n_subproblems")

@@ -1,6 +1,7 @@
 """Reads and writes of a job's outputs that the dashboard and the worker add to the store: the
 final hypervolume of jobs, points of a front, fronts of several jobs, artifacts made after a
-job finished (a front point's recording), and the reference point of a job's hypervolumes.
+job finished (a front point's recording), the reference point of a job's hypervolumes, and
+the per-objective minimum of a job's stored fronts (its convergence view).
 
 Like ``services.store.repository``: every function takes the ``Session`` first and never
 commits.
@@ -9,10 +10,13 @@ commits.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import Any
 
-from sqlalchemy import and_, func, select, update
+import numpy as np
+from sqlalchemy import and_, func, or_, select, update
 from sqlalchemy.orm import Session
 
+from services.store.front_codec import decode_front_array
 from services.store.records import ParetoPointRecord
 from services.store.repository import fetch_all, fetch_one, now_utc
 from services.store.tables import ARTIFACTS, GENERATIONS, JOBS, PARETO_POINTS, JobStatus
@@ -82,6 +86,41 @@ def add_artifact(
     )
 
 
+# --------------------------------------------------------------------------- convergence
+
+
+def front_minimum(front: Any) -> np.ndarray | None:
+    """Per-objective minimum of a stored front ((k, m) rows, ``None``/NaN where not finite),
+    NaN for an objective without a finite value; None without a front."""
+    if front is None:
+        return None
+    F = front if isinstance(front, np.ndarray) else np.asarray(front, dtype=float)
+    if F.ndim != 2 or F.size == 0:
+        return None
+    F = np.where(np.isfinite(F), F, np.inf)
+    low = F.min(axis=0)
+    return np.where(np.isfinite(low), low, np.nan)
+
+
+def best_front_minimum(session: Session, job_id: str, *, upto: int) -> np.ndarray | None:
+    """Per-objective minimum over the stored fronts of generations ``<= upto`` (NaN for an
+    objective without a finite value), or None when none of them has a front — what the
+    convergence view continues from when a page starts after ``upto``. Reads the fronts'
+    bytes without building Python lists."""
+    stmt = select(GENERATIONS.c.front_packed, GENERATIONS.c.front).where(
+        GENERATIONS.c.job_id == job_id,
+        GENERATIONS.c.generation <= upto,
+        or_(GENERATIONS.c.front_packed.is_not(None), GENERATIONS.c.front.is_not(None)),
+    )
+    best: np.ndarray | None = None
+    for packed, legacy in session.execute(stmt):
+        low = front_minimum(decode_front_array(packed) if packed is not None else legacy)
+        if low is None:
+            continue
+        best = low if best is None or best.shape != low.shape else np.fmin(best, low)
+    return best
+
+
 # --------------------------------------------------------------------------- hypervolume
 
 
@@ -114,7 +153,9 @@ def set_hypervolume_ref(
 
 __all__ = [
     "add_artifact",
+    "best_front_minimum",
     "final_hypervolumes",
+    "front_minimum",
     "fronts_of",
     "get_hypervolume_ref",
     "get_pareto_point",

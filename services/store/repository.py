@@ -24,6 +24,7 @@ from sqlalchemy.orm import Session
 
 from services.store.errors import ConflictError
 from services.store.front_codec import decode_front
+from services.store.id_prefix import owned_with_prefix
 from services.store.records import (
     ApiKeyRecord,
     ArtifactRecord,
@@ -285,12 +286,14 @@ def create_sweep(
 ) -> SweepRecord:
     """Store a sweep; create its jobs with ``create_job(..., sweep_id=sweep.id)`` in the same
     ``session_scope`` so the sweep and its jobs appear together."""
+    from services.store.robot_documents import by_reference
+
     sweep_id = new_id()
     session.execute(
         insert(SWEEPS).values(
             id=sweep_id,
             owner_key_id=owner_key_id,
-            base_spec=base_spec,
+            base_spec=by_reference(session, base_spec),
             axes=axes,
             created_at=now_utc(now),
         )
@@ -309,10 +312,19 @@ def get_sweep(
 
 
 def list_sweeps(
-    session: Session, *, owner_key_id: str | None = None, limit: int = 50, offset: int = 0
+    session: Session,
+    *,
+    owner_key_id: str | None = None,
+    limit: int = 50,
+    offset: int = 0,
+    id_prefix: str | None = None,
 ) -> Page[SweepRecord]:
-    """Sweeps (of one owner when given), newest first."""
-    stmt = select(SWEEPS).where(*_owned(SWEEPS, owner_key_id))
+    """Sweeps (of one owner when given; whose id starts with ``id_prefix`` when given, on the
+    primary key's index), newest first."""
+    conditions = _owned(SWEEPS, owner_key_id)
+    if id_prefix:
+        conditions = owned_with_prefix(SWEEPS, owner_key_id, id_prefix)
+    stmt = select(SWEEPS).where(*conditions)
     return fetch_page(
         session,
         SweepRecord,
@@ -369,9 +381,12 @@ def create_jobs(
     """Store several queued jobs in one INSERT; their ids in order.
 
     Give either whole ``specs`` or, for the jobs of sweep ``sweep_id``, their ``overrides`` of
-    the sweep's base spec (the spec is then stored once, in the sweep).
+    the sweep's base spec (the spec is then stored once, in the sweep). A spec's robot document
+    is stored once by content and referred to (``services.store.robot_documents``);
+    ``spec_bytes`` counts the whole spec, robot included.
     """
     from services.store.events import add_events
+    from services.store.robot_documents import by_reference
     from services.store.specs import json_size
 
     if (specs is None) == (overrides is None):
@@ -391,8 +406,8 @@ def create_jobs(
                 "owner_key_id": owner_key_id,
                 "sweep_id": sweep_id,
                 "status": JobStatus.QUEUED,
-                "spec": doc if specs is not None else None,
-                "overrides": dict(doc) if overrides is not None else None,
+                "spec": by_reference(session, doc) if specs is not None else None,
+                "overrides": by_reference(session, dict(doc)) if overrides is not None else None,
                 "spec_bytes": json_size(doc),
                 "progress_generation": 0,
                 "total_generations": int(total),
@@ -439,15 +454,25 @@ def job_labels(session: Session, jobs: Iterable[JobRecord]) -> dict[str, dict[st
 
 
 def job_spec(session: Session, job: JobRecord) -> Any:
-    """The spec document of a job: its own, or its sweep's base with its overrides applied."""
+    """The spec document of a job: its own, or its sweep's base with its overrides applied;
+    its robot document in place of the stored reference."""
+    from services.store.robot_documents import expand
+
     if job.spec is not None or job.sweep_id is None:
-        return copy.deepcopy(job.spec)
+        return copy.deepcopy(expand(session, job.spec))
     from services.store.specs import apply_overrides
 
     base = session.execute(
         select(SWEEPS.c.base_spec).where(SWEEPS.c.id == job.sweep_id)
     ).scalar_one_or_none()
-    return apply_overrides(base or {}, job.overrides or {})
+    return apply_overrides(expand(session, base or {}), expand(session, job.overrides or {}))
+
+
+def sweep_base_spec(session: Session, sweep: SweepRecord) -> Any:
+    """A sweep's base spec with its robot document in place of the stored reference."""
+    from services.store.robot_documents import expand
+
+    return copy.deepcopy(expand(session, sweep.base_spec))
 
 
 def get_job(session: Session, job_id: str, *, owner_key_id: str | None = None) -> JobRecord | None:
@@ -477,9 +502,13 @@ def list_jobs(
     sweep_id: str | None = None,
     limit: int = 50,
     offset: int = 0,
+    id_prefix: str | None = None,
 ) -> Page[JobRecord]:
-    """Jobs filtered by owner, status (one or several) and sweep, newest first."""
+    """Jobs filtered by owner, status (one or several), sweep and id prefix (a range of the
+    primary key's index: ``services.store.id_prefix``), newest first."""
     conditions = _owned(JOBS, owner_key_id)
+    if id_prefix:
+        conditions = owned_with_prefix(JOBS, owner_key_id, id_prefix)
     if status is not None:
         conditions.append(JOBS.c.status.in_(_statuses(status)))
     if sweep_id is not None:
@@ -611,4 +640,5 @@ __all__ = [
     "list_robots",
     "list_sweeps",
     "revoke_api_key",
+    "sweep_base_spec",
 ]

@@ -37,9 +37,20 @@ def spec_value(base: Any, overrides: Mapping[str, Any] | None, path: str) -> Any
     return get_path(base, path)
 
 
+def shown_value(base: Any, overrides: Mapping[str, Any] | None, path: str) -> Any:
+    """``spec_value`` for a table cell: a stored robot reference shown as the robot's name and
+    the first 8 hex digits of its content hash (two robots of one name stay apart)."""
+    from services.store.robot_documents import REF_KEY, is_reference
+
+    value = spec_value(base, overrides, path)
+    if is_reference(value):
+        return " ".join(filter(None, [value.get("name"), value[REF_KEY][:8]]))
+    return value
+
+
 def json_size(value: Any) -> int:
     """Bytes of ``value`` as compact JSON (what a stored spec costs against a storage quota)."""
     return len(json.dumps(value, separators=(",", ":"), default=str).encode())
 
 
-__all__ = ["apply_overrides", "json_size", "spec_value"]
+__all__ = ["apply_overrides", "json_size", "shown_value", "spec_value"]

@@ -409,6 +409,20 @@ class JobLabel(Base):
     search: Mapped[str] = mapped_column(Text, default="")
 
 
+class RobotDocument(Base):
+    """A robot document a job or sweep runs on (an inline spec, or a stored robot's document as
+    it was at submission), stored once by the SHA-256 of its canonical JSON: stored specs refer
+    to it as ``{"$robot_document": sha256}`` (``services.store.robot_documents``), so a URDF is
+    not copied into every job row. Immutable and shared by content; never updated."""
+
+    __tablename__ = "robot_documents"
+
+    sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
+    spec: Mapped[Any] = mapped_column(JSONValue())
+    size_bytes: Mapped[int] = mapped_column(BigInteger)
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)
+
+
 # Core handles on the tables (the repository issues Core statements, see repository.py).
 API_KEYS = cast(Table, ApiKey.__table__)
 ROBOTS = cast(Table, Robot.__table__)
@@ -423,5 +437,6 @@ ARTIFACTS = cast(Table, Artifact.__table__)
 JOB_EVENTS = cast(Table, JobEvent.__table__)
 SERVICE_LEASES = cast(Table, ServiceLease.__table__)
 IDEMPOTENCY_KEYS = cast(Table, IdempotencyKey.__table__)
+ROBOT_DOCUMENTS = cast(Table, RobotDocument.__table__)
 KEY_USAGE = cast(Table, KeyUsage.__table__)
 JOB_LABELS = cast(Table, JobLabel.__table__)

@@ -270,7 +270,9 @@ MAX_FRONT_POINTS = 300
 
 
 def _thin_front(F: Any) -> Any:
-    """The objective vectors of a front, at most ``MAX_FRONT_POINTS`` (evenly strided), as a
+    """The objective vectors of a front, at most ``MAX_FRONT_POINTS`` (evenly strided, plus
+    the point of least value of each objective, so that the stored front's per-objective
+    minimum is the whole front's: the dashboard's best-so-far curves are read from it), as a
     float (k, m) array (NaN where not finite: what the store keeps), or None for a
     single-objective run (its front is just the best point)."""
     import numpy as np
@@ -279,7 +281,11 @@ def _thin_front(F: Any) -> Any:
     if F.ndim != 2 or F.shape[1] < 2 or F.shape[0] == 0:
         return None
     if F.shape[0] > MAX_FRONT_POINTS:
-        F = F[np.linspace(0, F.shape[0] - 1, MAX_FRONT_POINTS).round().astype(int)]
+        finite = np.where(np.isfinite(F), F, np.inf)
+        extremes = {int(np.argmin(finite[:, j])) for j in range(F.shape[1])}
+        n = max(MAX_FRONT_POINTS - len(extremes), 2)
+        strided = set(np.linspace(0, F.shape[0] - 1, n).round().astype(int).tolist())
+        F = F[sorted(strided | extremes)]  # at most MAX_FRONT_POINTS rows
     return np.where(np.isfinite(F), F, np.nan)
 
 

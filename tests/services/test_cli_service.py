@@ -1,7 +1,8 @@
 """The `legopt` verbs that talk to a service, against a real embedded stack (API + 1 worker):
 id prefixes everywhere (unknown / ambiguous = exit 2 naming it), `status` as a summary line or
 block (`--json` the full record), `results` with readable names, `cancel` of a job and of a
-sweep."""
+sweep, `replay --point` saving a front point's recording, and `export` of the job list, a
+front, a history and a sweep's cells."""
 
 from __future__ import annotations
 
@@ -117,13 +118,43 @@ def test_cancel_a_job_and_a_sweep_by_prefix(stack: Stack, tmp_path: Path) -> Non
         assert [j["status"] for j in c.jobs(sweep_id=sweep_id)["items"]] == ["cancelled"] * 2
 
 
-def test_export_jobs_front_and_history(stack: Stack, tmp_path: Path) -> None:
-    """`legopt export`: the job list as CSV, a job's front as JSON and its history as Parquet
-    (read back with pyarrow), by id prefix."""
+def test_replay_a_front_point_saves_its_recording(stack: Stack, tmp_path: Path) -> None:
+    """`legopt replay JOB --point K --save FILE`: the recording of front point K, made on demand
+    by the service, saved as a Rerun file (the header a job's own recording starts with)."""
+    code, out = cli(stack, "submit", str(_spec(tmp_path, "004_path_tracking_energy_time.yaml", 3)),
+                    "--wait", "--quiet")  # fmt: skip
+    assert code == 0, out
+    job_id = out.strip().splitlines()[-1]
+    with stack.client() as c:
+        job_rrd = c.recording(job_id)
+        k = c.pareto(job_id)["items"][-1]["index"]
+    target = tmp_path / "point.rrd"
+    code, out = cli(stack, "replay", job_id[:8], "--point", str(k), "--save", str(target))
+    assert code == 0, out
+    assert f"saved {target}" in out.replace("\n", "")
+    data = target.read_bytes()
+    assert job_rrd[:4] == b"RRF2" and data[:4] == job_rrd[:4]
+    assert data != job_rrd  # that point's recording, not the job's
+    code, out = cli(stack, "replay", job_id[:8], "--point", "99999", "--save", str(target))
+    assert code == 2 and "no front point 99999" in out
+
+
+def test_export_jobs_front_history_and_cells(stack: Stack, tmp_path: Path) -> None:
+    """`legopt export`: the job list as CSV, a job's front as JSON (with its points' metrics)
+    and its history as Parquet (read back with pyarrow), a sweep's cells as CSV, by id
+    prefix."""
     import csv
 
     import pyarrow.parquet as pq
 
+    base = yaml.safe_load((ROOT / "examples" / "004_path_tracking_energy_time.yaml").read_text())
+    base.update(budget={"generations": 2}, record=False)
+    doc = tmp_path / "sweep.yaml"
+    doc.write_text(yaml.safe_dump({"base": base, "seeds": [1, 2],
+                                   "grid": {"optimizer.params.pop_size": [12, 16]}}))  # fmt: skip
+    code, out = cli(stack, "sweep", str(doc))
+    assert code == 0, out
+    sweep_id = re.search(r"sweep ([0-9a-f-]{36}): 4 jobs", out).group(1)  # type: ignore[union-attr]
     code, out = cli(stack, "submit", str(_spec(tmp_path, "004_path_tracking_energy_time.yaml", 3)),
                     "--wait", "--quiet")  # fmt: skip
     assert code == 0, out
@@ -137,7 +168,9 @@ def test_export_jobs_front_and_history(stack: Stack, tmp_path: Path) -> None:
                     "--out", str(tmp_path / "front.json"))  # fmt: skip
     assert code == 0, out
     front = json.loads((tmp_path / "front.json").read_text())
-    assert front, "an empty front"
+    assert front["rows"], "an empty front"
+    assert front["columns"][:3] == ["index", "time", "energy"]
+    assert all(isinstance(r["metric.energy"], float) for r in front["rows"])
     code, out = cli(stack, "export", "history", job_id[:8], "--format", "parquet",
                     "--out", str(tmp_path / "history.parquet"))  # fmt: skip
     assert code == 0, out
@@ -145,3 +178,22 @@ def test_export_jobs_front_and_history(stack: Stack, tmp_path: Path) -> None:
     assert table.num_rows == 3 and "generation" in table.column_names
     code, out = cli(stack, "export", "front", "ffffffff")
     assert code == 2 and "ffffffff" in out
+
+    with stack.client() as c:
+        jobs = c.jobs(sweep_id=sweep_id)["items"]
+    assert len(jobs) == 4
+    for j in jobs:
+        stack.wait_for(j["id"], lambda j: j["status"] == "succeeded", timeout_s=120)
+    code, out = cli(stack, "export", "cells", sweep_id[:8], "--out", str(tmp_path / "cells.csv"))
+    assert code == 0, out
+    with open(tmp_path / "cells.csv", newline="") as fh:
+        cells = list(csv.DictReader(fh))
+    assert [c["optimizer.params.pop_size"] for c in cells] == ["12", "16"]
+    assert [(c["jobs"], c["succeeded"]) for c in cells] == [("2", "2"), ("2", "2")]
+    assert all(float(c["time_mean"]) > 0 and c["time_n"] == "2" for c in cells)
+    code, out = cli(stack, "export", "cells", sweep_id[:8], "--format", "parquet",
+                    "--out", str(tmp_path / "cells.parquet"))  # fmt: skip
+    assert code == 0, out
+    assert pq.read_table(tmp_path / "cells.parquet").num_rows == 2
+    code, out = cli(stack, "export", "cells", "ffffffff")
+    assert code == 2 and "SWEEP: no sweep id starts with 'ffffffff'" in out

@@ -6,12 +6,14 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query
+from fastapi import APIRouter, HTTPException, Query, status
 from fastapi.responses import StreamingResponse
 
+from services.api.convergence import ConvergenceRow, convergence
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.export_formats import MEDIA_TYPES, ExportFormat, encode, filename
 from services.api.routes.dashboard import Filters, sync_labels
+from services.api.routes.job_views import point_metrics
 from services.api.routes.jobs import owned_job
 from services.api.routes.sweep_views import cell_table
 from services.api.schemas import ErrorOut, objective_names
@@ -90,17 +92,32 @@ def export_jobs(
 def export_front(
     job_id: str, key: CurrentKey, ctx: Context, format: FormatQuery = "csv"
 ) -> StreamingResponse:
-    """One row per front point: its index, each objective (by name) and each decision
-    variable (x1, x2, …)."""
+    """One row per front point: its index, each objective (by name), each of its metrics
+    (``metric.<name>``, SI units: the labels and units are those of `GET /jobs/{id}/front`'s
+    ``metrics``; decoded again from the point's decision vector the first time, then cached —
+    503 with ``Retry-After`` while a large front's are being computed; left out when the job's
+    spec cannot be decoded any more) and each decision variable (x1, x2, …)."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         points = repo.list_pareto(session, job.id)
         names = objective_names(repo.get_result_objectives(session, job.id))
+    per_point, state, _note = point_metrics(ctx, job, bool(points))
+    if state == "pending":
+        raise HTTPException(
+            status.HTTP_503_SERVICE_UNAVAILABLE,
+            f"the metrics of job {job.id}'s front points are being computed: retry shortly",
+            headers={"Retry-After": "5"},
+        )
     m = max((len(p.objectives or []) for p in points), default=len(names))
     names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
     n = max((len(p.x or []) for p in points), default=0)
-    columns = ["index", *names, *[f"x{i + 1}" for i in range(n)]]
-    rows = ((p.index, *_pad(p.objectives, m), *_pad(p.x, n)) for p in points)
+    metrics = list(dict.fromkeys(k for v in per_point.values() if v for k in v))
+    columns = ["index", *names, *[f"metric.{k}" for k in metrics], *[f"x{i + 1}" for i in range(n)]]
+    rows = (
+        (p.index, *_pad(p.objectives, m),
+         *[(per_point.get(p.index) or {}).get(k) for k in metrics], *_pad(p.x, n))
+        for p in points
+    )  # fmt: skip
     return _download(format, f"job-{job.id[:8]}-front", columns, rows)
 
 
@@ -118,29 +135,41 @@ def _pad(values: Any, n: int) -> list[Any]:
 def export_history(
     job_id: str, key: CurrentKey, ctx: Context, format: FormatQuery = "csv"
 ) -> StreamingResponse:
-    """One row per generation: evaluations so far, best value of each objective so far, the
-    hypervolume (against the job's reference point) and the generation's wall time (s)."""
+    """One row per generation: evaluations so far, the best value of each objective so far
+    (``best_<name>``: the least on the fronts so far, as the page's convergence plot), the
+    hypervolume (against the job's reference point) and the generation's wall time (s); for
+    several objectives also the least value of each on that generation's front
+    (``front_min_<name>``) and the objectives of the optimiser's reported compromise point
+    (``compromise_<name>``: the knee of that front, not a best per objective)."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         names = objective_names(repo.get_result_objectives(session, job.id))
         rows: list[Any] = []
+        conv: list[ConvergenceRow] = []
         after: int | None = None
         while True:
             chunk = repo.list_generations(session, job.id, after=after, limit=1000)
+            conv.extend(convergence(session, job.id, chunk, after=after))
             rows.extend(chunk)
             if len(chunk) < 1000:
                 break
             after = chunk[-1].generation
     m = max((len(g.best) if isinstance(g.best, list) else 1 for g in rows), default=len(names))
     names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
+    several = m > 1
     columns = ["generation", "n_evals", *[f"best_{n}" for n in names], "hypervolume",
                "wall_time_s"]  # fmt: skip
-    data = (
-        (g.generation, g.n_evals, *_pad(g.best if isinstance(g.best, list) else [g.best], m),
-         g.hypervolume, g.wall_time_s)
-        for g in rows
-    )  # fmt: skip
-    return _download(format, f"job-{job.id[:8]}-history", columns, data)
+    if several:
+        columns += [f"front_min_{n}" for n in names] + [f"compromise_{n}" for n in names]
+
+    def data() -> Iterator[tuple[Any, ...]]:
+        for g, c in zip(rows, conv, strict=True):
+            reported = _pad(g.best if isinstance(g.best, list) else [g.best], m)
+            row = (g.generation, g.n_evals, *_pad(c.best_so_far, m), g.hypervolume,
+                   g.wall_time_s)  # fmt: skip
+            yield (*row, *_pad(c.front_min, m), *reported) if several else row
+
+    return _download(format, f"job-{job.id[:8]}-history", columns, data())
 
 
 @router.get(

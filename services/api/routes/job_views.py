@@ -4,6 +4,7 @@ baselines, any solution's motion decoded again, and a front point's Rerun record
 from __future__ import annotations
 
 from typing import Annotated, Any
+from urllib.parse import quote
 
 import yaml
 from fastapi import APIRouter, HTTPException, Query, Response, status
@@ -21,8 +22,13 @@ from services.api.dashboard_schemas import (
     Quantity,
     quantities,
 )
-from services.api.deps import Context, CurrentKey
-from services.api.points import point_motion, point_recording
+from services.api.deps import ApiContext, Context, CurrentKey
+from services.api.points import (
+    baseline_recording,
+    front_metrics,
+    point_motion,
+    point_recording,
+)
 from services.api.routes.jobs import owned_job
 from services.api.schemas import ErrorOut, objective_names
 from services.store import output_queries as oq
@@ -95,10 +101,14 @@ def _baseline_mark(b: BaselineRecord, names: list[str]) -> BaselineMark | None:
     responses=_404,
 )
 def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
-    """Every point of the final front (objectives and decision vector), the objectives' and
-    metrics' readable names and units, the index of the reported optimum on the front, the
-    baselines (the study's reference solutions, e.g. the paper's) by objective, and the
-    reference point of the job's hypervolumes. Empty until the job succeeded."""
+    """Every point of the final front (objectives, decision vector and metrics), the
+    objectives' and metrics' readable names and units, the index of the reported optimum on
+    the front, the baselines (the study's reference solutions, e.g. the paper's) by objective,
+    and the reference point of the job's hypervolumes. Empty until the job succeeded.
+
+    The points' metrics are decoded again from their stored decision vectors on the first
+    request (the same deterministic decode as a point's motion) and cached as the job's
+    artifact ``front-metrics``; a large front may answer ``point_metrics: pending`` first."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         points = repo.list_pareto(session, job.id)
@@ -127,7 +137,11 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
             best_index = points[dist.index(min(dist))].index
     marks = [m for b in baselines if (m := _baseline_mark(b, names)) is not None]
     objective_quantities = quantities(names, kind)
-    metrics = sorted((result.metrics or {}).keys()) if result is not None else []
+    per_point, state, note = point_metrics(ctx, job, bool(points))
+    # the result's order (as the job's metric table), then any only the points have
+    keys = dict.fromkeys(result.metrics or {}) if result is not None else {}
+    keys.update(dict.fromkeys(k for v in per_point.values() if v for k in v))
+    metrics = list(keys)
     return FrontOut(
         job_id=job.id,
         status=job.status,
@@ -142,14 +156,35 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
                 index=p.index,
                 objectives=[_num(v) for v in p.objectives or []],
                 x=[_num(v) for v in p.x or []],
+                metrics=per_point.get(p.index),
             )
             for p in points
         ],
+        point_metrics=state,
+        point_metrics_note=note,
         best_index=best_index,
         baselines=marks,
         hypervolume_ref=ref,
         paper=paper_numbers(spec, objective_quantities, kind),
     )
+
+
+def point_metrics(
+    ctx: ApiContext, job: JobRecord, any_points: bool
+) -> tuple[dict[int, dict[str, Any] | None], str, str | None]:
+    """``(metrics by point index, state, note)`` of a job's front (``FrontOut.point_metrics``):
+    computed once and cached (``services.api.points.front_metrics``); pending when that takes
+    longer than a request waits, unavailable when the spec cannot be decoded again."""
+    if not any_points or job.status is not JobStatus.SUCCEEDED:
+        return {}, "ready", None
+    try:
+        return front_metrics(ctx, job), "ready", None
+    except HTTPException as exc:
+        if exc.status_code == status.HTTP_503_SERVICE_UNAVAILABLE:
+            return {}, "pending", "the points' metrics are being computed: ask again shortly"
+        if exc.status_code == status.HTTP_409_CONFLICT:
+            return {}, "unavailable", str(exc.detail)
+        raise
 
 
 def paper_numbers(spec: Any, objectives: list[Quantity], kind: str | None) -> PaperOut | None:
@@ -206,6 +241,10 @@ async def get_motion(
     out = MotionOut(**payload)
     if point is not None:
         out.recording_url = f"{ctx.prefix}/jobs/{job.id}/pareto/{point}/recording"
+    elif baseline is not None:
+        out.recording_url = (
+            f"{ctx.prefix}/jobs/{job.id}/baselines/{quote(baseline, safe='')}/recording"
+        )
     return out
 
 
@@ -229,17 +268,47 @@ async def get_point_recording(job_id: str, k: str, key: CurrentKey, ctx: Context
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {k!r}")
     _succeeded(job, "a point's recording")
     artifact = await run_in_threadpool(point_recording, ctx, job, int(k))
+    return _rrd(ctx, job, artifact, f"point {k}", f"{job.id}-point-{int(k)}.rrd")
+
+
+def _rrd(ctx: ApiContext, job: JobRecord, artifact: Any, what: str, name: str) -> FileResponse:
     store = ctx.artifacts
     try:
         store.verify(artifact.relative_path, artifact.sha256)
         path = store.path(artifact.relative_path)
     except FileNotFoundError:
         raise ArtifactError(
-            f"the recording of point {k} of job {job.id} is missing from the artifact store"
+            f"the recording of {what} of job {job.id} is missing from the artifact store"
         ) from None
     return FileResponse(
         path,
         media_type="application/octet-stream",
-        filename=f"{job.id}-point-{int(k)}.rrd",
+        filename=name,
         headers={"X-Checksum-SHA256": artifact.sha256},
     )
+
+
+@router.get(
+    "/jobs/{job_id}/baselines/{name}/recording",
+    response_class=FileResponse,
+    summary="The Rerun recording of one baseline (made on demand, then cached)",
+    responses={
+        200: {"content": {"application/octet-stream": {}}, "description": "The .rrd file."},
+        **_POINT_ERRORS,
+    },
+)
+async def get_baseline_recording(
+    job_id: str, name: str, key: CurrentKey, ctx: Context
+) -> FileResponse:
+    """The ``.rrd`` of the job's recording with the baseline ``name`` (a study's reference
+    solution, as `GET /jobs/{id}/front` lists them) as its motion, decoded again on the first
+    request and kept as a job artifact, like a front point's. Made whether or not the job
+    recorded itself (``record``)."""
+    with ctx.read() as session:
+        job = owned_job(session, job_id, key.id)
+    if len(name) > 200:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no such baseline")
+    _succeeded(job, "a baseline's recording")
+    artifact = await run_in_threadpool(baseline_recording, ctx, job, name)
+    safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)[:60]
+    return _rrd(ctx, job, artifact, f"baseline {name}", f"{job.id}-baseline-{safe}.rrd")

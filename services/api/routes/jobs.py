@@ -9,7 +9,15 @@ from fastapi import APIRouter, Body, HTTPException, Query, Response, status
 from fastapi.responses import FileResponse
 from sqlalchemy.orm import Session
 
-from services.api.deps import MAX_OFFSET, ApiContext, Context, CurrentKey, Pagination
+from services.api.convergence import convergence
+from services.api.deps import (
+    MAX_OFFSET,
+    ApiContext,
+    Context,
+    CurrentKey,
+    IdPrefix,
+    Pagination,
+)
 from services.api.errors import not_found
 from services.api.routes.robots import robot_lookup
 from services.api.schemas import (
@@ -119,7 +127,7 @@ def submit_job(
         return detail
     ctx.send_jobs([job.id])
     response.headers["Location"] = f"{ctx.prefix}/jobs/{job.id}"
-    return JobDetail.from_record(job)
+    return JobDetail.from_record(job, checked.spec)
 
 
 @router.get("/jobs", response_model=Page[JobOut], summary="List your jobs (newest first)")
@@ -131,14 +139,17 @@ def list_jobs(
         list[JobStatus] | None, Query(alias="status", description="Only these statuses.")
     ] = None,
     sweep_id: Annotated[str | None, Query(description="Only the jobs of this sweep.")] = None,
+    id_prefix: IdPrefix = None,
 ) -> Page[JobOut]:
-    """Your jobs, filtered by status (repeat the parameter for several) and sweep."""
+    """Your jobs, filtered by status (repeat the parameter for several), sweep and id prefix
+    (what `legopt status 2253` resolves: a range scan of the primary key)."""
     with ctx.read() as session:
         jobs = repo.list_jobs(
             session,
             owner_key_id=key.id,
             status=status_ or None,
             sweep_id=sweep_id,
+            id_prefix=id_prefix or None,
             limit=page.limit,
             offset=page.offset,
         )
@@ -238,12 +249,19 @@ def get_generations(
     ] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_LIMIT)] = MAX_LIMIT,
 ) -> GenerationPage:
-    """Generation rows in order (0 is the initial population)."""
+    """Generation rows in order (0 is the initial population): evaluations, the reported
+    solution's objectives (`best`), the least value of each objective on the generation's
+    front (`front_min`) and so far (`best_so_far`: what the convergence plot shows), the
+    hypervolume and the wall time."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         rows = repo.list_generations(session, job.id, after=after, limit=limit)
+        conv = convergence(session, job.id, rows, after=after)
     return GenerationPage(
-        items=[GenerationOut.from_record(g) for g in rows],
+        items=[
+            GenerationOut.from_record(g, best_so_far=c.best_so_far, front_min=c.front_min)
+            for g, c in zip(rows, conv, strict=True)
+        ],
         limit=limit,
         after=after,
         next_after=rows[-1].generation if rows else after,

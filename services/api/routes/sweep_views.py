@@ -25,7 +25,7 @@ from services.api.sweeps import swept_paths
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.records import JobRecord, SweepRecord
-from services.store.specs import spec_value
+from services.store.specs import shown_value, spec_value
 from services.store.tables import JobStatus
 
 router = APIRouter(tags=["dashboard"])
@@ -58,7 +58,7 @@ def cell_table(ctx: Any, key_id: str, sweep_id: str) -> tuple[SweepRecord, CellT
     swept = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
 
     def value(job: JobRecord, path: str) -> Any:
-        return spec_value(job.spec or sweep.base_spec, job.overrides, path)
+        return shown_value(job.spec or sweep.base_spec, job.overrides, path)
 
     kind = study_kind(sweep)
     table = build_cells(

@@ -8,7 +8,7 @@ from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse
 
-from services.api.deps import Context, CurrentKey, Pagination
+from services.api.deps import Context, CurrentKey, IdPrefix, Pagination
 from services.api.errors import MAX_ERRORS, invalid, not_found, validation_error
 from services.api.merged_recordings import merged_recording
 from services.api.routes.robots import robot_lookup
@@ -36,7 +36,7 @@ from services.store import repository as repo
 from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
 from services.store.records import JobRecord
-from services.store.specs import json_size, spec_value
+from services.store.specs import json_size, shown_value
 from services.store.tables import JobStatus
 
 router = APIRouter(tags=["sweeps"])
@@ -94,7 +94,8 @@ def create_sweep(
             check_replay(session, key, idempotency_key, fingerprint, "sweep")
             base, points, checked = _expand_and_check(body, key.id, ctx, session)
         axes = {"grid": body.grid, "list": body.entries, "seeds": body.seeds, "n_jobs": len(points)}
-        new_bytes = json_size(base) + sum(json_size(p.overrides) for p in points)
+        overrides = [_resolved(p, c) for p, c in zip(points, checked, strict=True)]
+        new_bytes = json_size(base) + sum(json_size(o) for o in overrides)
         with ctx.write() as session:
             check_replay(session, key, idempotency_key, fingerprint, "sweep")
             check_quota(session, key, ctx.settings, new_jobs=len(points), new_bytes=new_bytes)
@@ -102,7 +103,7 @@ def create_sweep(
             job_ids = repo.create_jobs(
                 session,
                 owner_key_id=key.id,
-                overrides=[p.overrides for p in points],
+                overrides=overrides,
                 total_generations=[c.total_generations for c in checked],
                 sweep_id=sweep.id,
             )
@@ -112,6 +113,15 @@ def create_sweep(
         return _created(ctx, key.id, replay.record.resource_id, response)
     ctx.send_jobs(job_ids)
     return _created(ctx, key.id, sweep.id, response, job_ids)
+
+
+def _resolved(point: SweepPoint, checked: CheckedJob) -> dict[str, Any]:
+    """The overrides to store for ``point``: a swept ``robot`` (a stored robot's id or name)
+    replaced by what it resolved to at validation, so the job runs that robot (the store keeps
+    a robot document once, by reference)."""
+    if "robot" not in point.overrides:
+        return point.overrides
+    return {**point.overrides, "robot": checked.spec.get("robot")}
 
 
 def _expand_and_check(
@@ -165,12 +175,15 @@ def _created(
 
 
 @router.get("/sweeps", response_model=Page[SweepSummary], summary="List your sweeps (newest first)")
-def list_sweeps(key: CurrentKey, ctx: Context, page: Pagination) -> Page[SweepSummary]:
-    """Your sweeps with their job counts per status."""
+def list_sweeps(
+    key: CurrentKey, ctx: Context, page: Pagination, id_prefix: IdPrefix = None
+) -> Page[SweepSummary]:
+    """Your sweeps with their job counts per status; ``id_prefix``: only ids starting with it."""
     with ctx.read() as session:
         sweeps = repo.list_sweeps(
-            session, owner_key_id=key.id, limit=page.limit, offset=page.offset
-        )
+            session, owner_key_id=key.id, limit=page.limit, offset=page.offset,
+            id_prefix=id_prefix or None,
+        )  # fmt: skip
         items = [
             SweepSummary.from_record(
                 s, repo.count_jobs_by_status(session, owner_key_id=key.id, sweep_id=s.id)
@@ -217,6 +230,7 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
         results = repo.result_briefs(
             session, [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
         )
+        base = repo.sweep_base_spec(session, sweep)
     axes = sweep.axes if isinstance(sweep.axes, dict) else {}
     columns = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
     names: list[str] = []
@@ -234,7 +248,7 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
                 job_id=job.id,
                 status=job.status,
                 overrides={
-                    path: spec_value(job.spec or sweep.base_spec, job.overrides, path)
+                    path: shown_value(job.spec or sweep.base_spec, job.overrides, path)
                     for path in columns
                 },
                 progress=job.progress,
@@ -247,7 +261,7 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
     summary = SweepSummary.from_record(sweep, counts)
     return SweepOut(
         **summary.model_dump(),
-        base=sweep.base_spec,
+        base=base,
         axes=axes,
         columns=columns,
         objective_names=names,

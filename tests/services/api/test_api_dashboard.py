@@ -1,8 +1,10 @@
 """The dashboard's API on a real SQLite database with jobs run in-process by the real executor:
 the jobs page (filters, sorts, search, keyset paging, tenancy), a job's front with labelled
-objectives and its per-generation hypervolume, a front point's motion and on-demand recording
-(cached as an artifact), sweep cells and fronts, robot views, exports, and the pages and
-assets served without the internet."""
+objectives, per-point metrics and its per-generation hypervolume, the best of each objective
+so far (seed 002, three objectives), a front point's and a baseline's motion and on-demand
+recording (cached as an artifact), the spec as YAML, the job list's id-prefix filter, sweep
+cells and fronts, robot views, exports, and the pages and assets served without the
+internet."""
 
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+import yaml
 from fastapi.testclient import TestClient
 
 from services.api.app import create_app
@@ -29,6 +32,7 @@ from services.store.settings import get_settings
 from services.worker.execute import execute_job
 
 API = "/api/v1"
+ROOT = Path(__file__).resolve().parents[3]
 SPEC: dict[str, Any] = {
     "name": "front demo",
     "tags": ["demo", "energy-time"],
@@ -55,7 +59,7 @@ def env(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
     app = create_app(settings, enqueue=lambda _j: None)
     ctx: ApiContext = app.state.context
     keys = {}
-    for name in ("alice", "bob"):
+    for name in ("alice", "bob", "carol"):
         raw, key_hash = generate_api_key()
         with ctx.write() as s:
             repo.create_api_key(s, name=name, key_hash=key_hash)
@@ -308,3 +312,202 @@ def test_paper_solution_is_marked_where_every_objective_was_printed() -> None:
         ("paper's optimum", [0.0001, 0.0009, 0.000764])
     ]
     assert paper_numbers({"problem": {"kind": "nothing"}}, quantities(names), None) is None
+
+
+def test_front_points_carry_their_metrics_decoded_once(env: dict[str, Any]) -> None:
+    """Every front point's metrics (labelled with readable names and units) are those its
+    motion decodes to; computed once and kept as the artifact ``front-metrics``; in the front
+    export as ``metric.<name>`` columns."""
+    client, alice, ctx = env["client"], env["alice"], env["ctx"]
+    front = client.get(f"{API}/jobs/{env['job']}/front", headers=alice).json()
+    assert front["point_metrics"] == "ready" and front["point_metrics_note"] is None
+    labels = {q["name"]: q for q in front["metrics"]}
+    assert labels["energy"]["unit"] == "J" and labels["time"]["label"] == "cycle time"
+    points = front["points"]
+    assert all(p["metrics"] and set(p["metrics"]) <= set(labels) for p in points)
+    point = points[len(points) // 2]
+    motion = client.get(f"{API}/jobs/{env['job']}/motion?point={point['index']}", headers=alice)
+    decoded = motion.json()["metrics"]
+    assert decoded and {k: point["metrics"][k] for k in decoded} == pytest.approx(decoded)
+    assert point["metrics"]["time"] == pytest.approx(point["objectives"][0], rel=1e-12)
+    with ctx.read() as s:
+        art = repo.get_artifact(s, env["job"], "front-metrics")
+    assert art is not None and art.relative_path.endswith(".json")
+
+    # served from the artifact afterwards: no decoding
+    from services.worker import point_recording
+
+    def no_decode(*_a: Any, **_k: Any) -> Any:
+        raise AssertionError("the front's metrics were decoded again")
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(point_recording, "decode_point", no_decode)
+    try:
+        again = client.get(f"{API}/jobs/{env['job']}/front", headers=alice).json()
+        r = client.get(f"{API}/jobs/{env['job']}/front/export?format=csv", headers=alice)
+    finally:
+        mp.undo()
+    assert [p["metrics"] for p in again["points"]] == [p["metrics"] for p in points]
+    assert r.status_code == 200, r.text
+    rows = list(csv.DictReader(io.StringIO(r.text)))
+    assert len(rows) == len(points)
+    metric_columns = [c for c in rows[0] if c.startswith("metric.")]
+    assert "metric.energy" in metric_columns and "metric.time" in metric_columns
+    row = next(r for r in rows if int(r["index"]) == point["index"])
+    assert float(row["metric.energy"]) == pytest.approx(point["metrics"]["energy"])
+    assert list(rows[0])[:3] == ["index", "time", "energy"] and "x1" in rows[0]
+    for fmt in ("json", "parquet"):
+        r = client.get(f"{API}/jobs/{env['job']}/front/export?format={fmt}", headers=alice)
+        cols = (
+            json.loads(r.content)["columns"]
+            if fmt == "json"
+            else pq.read_table(io.BytesIO(r.content)).column_names
+        )
+        assert "metric.energy" in cols, fmt
+
+
+def test_a_baseline_has_its_own_recording(env: dict[str, Any]) -> None:
+    """Clicking a baseline opens that baseline's recording (made on demand like a point's),
+    not the whole job's."""
+    client, alice, ctx = env["client"], env["alice"], env["ctx"]
+    motion = client.get(f"{API}/jobs/{env['job']}/motion?baseline=seed_max_V", headers=alice)
+    url = motion.json()["recording_url"]
+    assert url == f"{API}/jobs/{env['job']}/baselines/seed_max_V/recording"
+    r = client.get(url, headers=alice)
+    assert r.status_code == 200, r.text
+    assert r.content[:4] == b"RRF2" and r.headers["x-checksum-sha256"]
+    job_rrd = client.get(f"{API}/jobs/{env['job']}/recording", headers=alice).content
+    assert job_rrd[:4] == b"RRF2" and r.content != job_rrd
+    with ctx.read() as s:
+        kinds = {a.kind for a in repo.list_artifacts(s, env["job"])}
+    assert "baseline-1" in kinds  # seed_max_V: the second baseline by name
+    assert client.get(url, headers=alice).content == r.content
+    missing = client.get(f"{API}/jobs/{env['job']}/baselines/nope/recording", headers=alice)
+    assert missing.status_code == 404 and "seed_max_V" in missing.text
+    # made on demand: a job that did not record itself (record: false) has them too
+    quiet = env["sweep_jobs"][0]
+    assert client.get(f"{API}/jobs/{quiet}/recording", headers=alice).status_code == 404
+    r = client.get(f"{API}/jobs/{quiet}/baselines/seed/recording", headers=alice)
+    assert r.status_code == 200 and r.content[:4] == b"RRF2"
+    assert client.get(url, headers=env["bob"]).status_code == 404
+
+
+def test_spec_yaml_is_the_stored_spec(env: dict[str, Any]) -> None:
+    client, alice, ctx = env["client"], env["alice"], env["ctx"]
+    for job_id in (env["job"], env["sweep_jobs"][-1]):  # its own spec; a sweep's base + overrides
+        r = client.get(f"{API}/jobs/{job_id}/spec.yaml", headers=alice)
+        assert r.status_code == 200 and r.headers["content-type"].startswith("application/yaml")
+        assert f'filename="job-{job_id[:8]}.yaml"' in r.headers["content-disposition"]
+        with ctx.read() as s:
+            stored = repo.job_spec(s, repo.get_job(s, job_id))  # type: ignore[arg-type]
+        assert yaml.safe_load(r.text) == stored
+    last = yaml.safe_load(client.get(f"{API}/jobs/{env['sweep_jobs'][-1]}/spec.yaml",
+                                     headers=alice).text)  # fmt: skip
+    assert last["optimizer"]["params"]["pop_size"] == 32 and last["record"] is False
+    assert client.get(f"{API}/jobs/{env['job']}/spec.yaml", headers=env["bob"]).status_code == 404
+
+
+def test_job_and_sweep_lists_filter_by_id_prefix(
+    env: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    client, alice = env["client"], env["alice"]
+    job = env["job"]
+    for prefix in (job[:6], job[:9], job[:13].upper(), job):
+        page = client.get(f"{API}/jobs", params={"id_prefix": prefix}, headers=alice).json()
+        assert [i["id"] for i in page["items"]] == [job] and page["total"] == 1, prefix
+    everything = client.get(f"{API}/jobs", params={"id_prefix": ""}, headers=alice).json()
+    assert everything["total"] == 5
+    for impossible in ("zz", job[:8] + "x", "0" * 9, job + "0"):
+        r = client.get(f"{API}/jobs", params={"id_prefix": impossible}, headers=alice)
+        assert r.status_code == 422 if len(impossible) > 36 else r.json()["total"] == 0
+    assert client.get(f"{API}/jobs", params={"id_prefix": job[:6]},
+                      headers=env["bob"]).json()["total"] == 0  # fmt: skip
+    sweeps = client.get(f"{API}/sweeps", params={"id_prefix": env["sweep"][:5]}, headers=alice)
+    assert [s["id"] for s in sweeps.json()["items"]] == [env["sweep"]]
+
+    # the CLI's client resolves a prefix with one request (no paging through the list)
+    from services.client import Client
+
+    c = Client(key=alice["X-API-Key"])
+    c.http = TestClient(client.app, base_url="http://testserver/api/v1", headers=alice)
+    requests: list[str] = []
+    send = c.http.request
+
+    def counted(method: str, url: Any, **kw: Any) -> Any:
+        requests.append(f"{method} {url} {kw.get('params')}")
+        return send(method, url, **kw)
+
+    monkeypatch.setattr(c.http, "request", counted)
+    assert c.ids_with_prefix("jobs", job[:7].upper()) == [job]
+    assert len(requests) == 1 and "id_prefix" in requests[0], requests
+    assert c.ids_with_prefix("sweeps", env["sweep"][:4]) == [env["sweep"]]
+    assert c.ids_with_prefix("jobs", "zz") == [] and len(requests) == 3
+
+
+@pytest.fixture(scope="module")
+def hexapod(env: dict[str, Any]) -> str:
+    """Seed 002 (three objectives, MOEA/D), run to the end for Carol."""
+    spec = yaml.safe_load((ROOT / "examples" / "002_hexapod_workspace.yaml").read_text())
+    spec["record"] = False
+    r = env["client"].post(f"{API}/jobs", json=spec, headers=env["carol"])
+    assert r.status_code == 202, r.text
+    job_id = str(r.json()["id"])
+    assert execute_job(job_id, env["ctx"].settings).status == "succeeded"
+    return job_id
+
+
+def test_best_per_objective_never_gets_worse(env: dict[str, Any], hexapod: str) -> None:
+    """Seed 002: the stored per-generation `best` is the compromise point of the front and
+    rises in some objective; `best_so_far` (the convergence plot's and the history export's
+    `best_<name>`) is the running minimum of each generation's front minimum: never worse,
+    and down to the final front's minimum."""
+    from services.api import convergence
+
+    client, carol = env["client"], env["carol"]
+    url = f"{API}/jobs/{hexapod}/generations"
+    rows = client.get(url, params={"limit": 1000}, headers=carol).json()["items"]
+    assert len(rows) == 100
+    reported = np.array([r["best"] for r in rows], dtype=float)
+    assert (np.diff(reported, axis=0) > 0).any(), "the compromise point never rose here"
+    best = np.array([r["best_so_far"] for r in rows], dtype=float)
+    assert best.shape == (100, 3) and np.isfinite(best).all()
+    assert (np.diff(best, axis=0) <= 0).all()
+    front_min = np.array([r["front_min"] for r in rows], dtype=float)
+    assert np.array_equal(best, np.minimum.accumulate(front_min, axis=0))
+    assert (best <= reported).all()
+    pareto = client.get(f"{API}/jobs/{hexapod}/front", headers=carol).json()["points"]
+    final = np.array([p["objectives"] for p in pareto], dtype=float)
+    assert (best[-1] <= final.min(axis=0) + 1e-15).all()
+
+    # polled page by page (`after`), from the cache or (another process) from the store
+    for cached in (True, False):
+        after, paged = -1, []
+        while True:
+            if not cached:
+                convergence._cache.clear()
+            page = client.get(url, params={"after": after, "limit": 7}, headers=carol).json()
+            if not page["items"]:
+                break
+            paged += page["items"]
+            after = page["next_after"]
+        assert [p["best_so_far"] for p in paged] == [r["best_so_far"] for r in rows]
+
+    r = client.get(f"{API}/jobs/{hexapod}/history/export?format=json", headers=carol)
+    doc = json.loads(r.content)
+    names = ["f1_beta1", "f2_beta5", "f3_perimeter"]
+    assert doc["columns"][:5] == ["generation", "n_evals", *[f"best_{n}" for n in names]]
+    exported = np.array([[row[f"best_{n}"] for n in names] for row in doc["rows"]])
+    assert np.array_equal(exported, best)
+    assert [row[f"compromise_{names[0]}"] for row in doc["rows"]] == list(reported[:, 0])
+
+
+def test_single_objective_best_so_far_is_the_incumbent(env: dict[str, Any]) -> None:
+    client, alice = env["client"], env["alice"]
+    spec = {"problem": {"kind": "swing_energy"}, "optimizer": {"kind": "ga"},
+            "budget": {"generations": 4}, "record": False}  # fmt: skip
+    r = client.post(f"{API}/jobs", json=spec, headers=env["carol"])
+    job_id = r.json()["id"]
+    assert execute_job(job_id, env["ctx"].settings).status == "succeeded"
+    rows = client.get(f"{API}/jobs/{job_id}/generations", headers=env["carol"]).json()["items"]
+    assert rows and all(g["best_so_far"] == g["best"] and g["front_min"] is None for g in rows)
+    assert client.get(f"{API}/jobs/{job_id}/generations", headers=alice).status_code == 404

@@ -295,3 +295,24 @@ def test_sweep_does_not_mutate_request_copies() -> None:
     points = expand(base, grid={"robot.joints.0.mass": [2.0, 3.0]})
     assert base == snapshot
     assert points[0].spec["robot"] is not points[1].spec["robot"]
+
+
+def test_sweep_over_stored_robots_runs_each_robot(
+    client: TestClient, alice: dict[str, str], sent: list[str]
+) -> None:
+    """A ``robot`` axis of stored robots' names: each job reads back (and a worker runs) the
+    robot it names, not the name."""
+    kind, spec = serial_study()
+    heavy = copy.deepcopy(spec)
+    heavy["joints"][0]["mass"] = 9.0
+    for name, doc in (("light", spec), ("heavy", heavy)):
+        r = client.post(f"{API}/robots", json={"name": name, "spec": doc}, headers=alice)
+        assert r.status_code == 201, r.text
+    body = {"base": {"problem": {"kind": kind}}, "grid": {"robot": ["light", "heavy"]}}
+    r = client.post(f"{API}/sweeps", json=body, headers=alice)
+    assert r.status_code == 202, r.text
+    robots = [client.get(f"{API}/jobs/{j}", headers=alice).json()["spec"]["robot"] for j in sent]
+    assert [r["joints"][0]["mass"] for r in robots] == [spec["joints"][0]["mass"], 9.0]
+    table = client.get(f"{API}/sweeps/{r.json()['id']}", headers=alice).json()["table"]["items"]
+    shown = [row["overrides"]["robot"] for row in table]
+    assert len(set(shown)) == 2 and all(isinstance(v, str) for v in shown), shown

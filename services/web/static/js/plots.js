@@ -1,5 +1,5 @@
 // Plotly wrappers: the Pareto front (2-D, or 3-D for three objectives) with baselines, the
-// paper's own values and the optimum marked, convergence (best per objective and hypervolume per generation), joint
+// paper's own values and the optimum marked, convergence (best per objective so far and hypervolume per generation), joint
 // signals of one solution, and fronts of several sweep cells overlaid.
 import { axis } from "./ui.js";
 
@@ -70,7 +70,10 @@ export function frontPlot(el, front, onPick, selected = null) {
   });
 }
 
-/** Best value of each objective (one subplot each) and hypervolume per generation. */
+/** Best value of each objective so far (one subplot each) and hypervolume per generation.
+ * The best so far is the API's `best_so_far` (the least value of the objective on the fronts
+ * up to that generation); a row without it (an older API) falls back to `best`, which for
+ * several objectives is the compromise point's and may rise. */
 export function convergencePlot(el, generations, objectives) {
   const g = generations.map((r) => r.generation);
   const m = Math.max(1, objectives.length);
@@ -81,11 +84,14 @@ export function convergencePlot(el, generations, objectives) {
   const layout = { ...LAYOUT, grid: { rows, columns: 1, pattern: "independent" }, showlegend: false,
     height: 130 * rows + 70, margin: { l: 70, r: 16, t: 20, b: 40 } };
   for (let j = 0; j < m; j++) {
-    const y = generations.map((r) => (Array.isArray(r.best) ? r.best[j] : r.best));
+    const y = generations.map((r) => {
+      const b = Array.isArray(r.best_so_far) ? r.best_so_far : r.best_so_far === undefined ? r.best : null;
+      return Array.isArray(b) ? b[j] : b;
+    });
     const ax = j === 0 ? "" : String(j + 1);
     traces.push({ type: "scatter", mode: "lines", x: g, y, xaxis: `x${ax}`, yaxis: `y${ax}`,
-      name: `best ${objectives[j] ? objectives[j].label : ""}`, line: { color: COLORS[j] } });
-    layout[`yaxis${ax}`] = { title: { text: `best ${axis(objectives[j])}`, font: { size: 11 } } };
+      name: `best ${objectives[j] ? objectives[j].label : ""} so far`, line: { color: COLORS[j], shape: "hv" } });
+    layout[`yaxis${ax}`] = { title: { text: `best ${axis(objectives[j])} so far`, font: { size: 11 } } };
   }
   if (hasHv) {
     const ax = String(m + 1);

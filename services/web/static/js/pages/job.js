@@ -1,6 +1,7 @@
-// One job: status and progress (polled while it runs), convergence (best per objective and
-// hypervolume per generation), the Pareto front (click a point, a table row or a baseline to
-// see that solution's joint signals and its Rerun recording), metrics, spec, downloads.
+// One job: status and progress (polled while it runs), convergence (best per objective so far
+// and hypervolume per generation), the Pareto front (click a point, a table row or a baseline
+// to see that solution's joint signals and its Rerun recording), the front's points with their
+// objectives, metrics and decision variables, metrics, spec, downloads.
 import { api, download } from "../api.js";
 import { convergencePlot, frontPlot, jointPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
@@ -8,6 +9,8 @@ import { badge, bar, best, clear, fill, h, num, shortId, TERMINAL, when } from "
 import { rerun } from "./jobs.js";
 
 const POLL_MS = 1500;
+// How often the page asks again for a front whose points' metrics are still being computed.
+const METRICS_RETRY_MS = 3000;
 
 export async function render(main, jobId) {
   let alive = true;
@@ -23,6 +26,7 @@ export async function render(main, jobId) {
   const spec = h("div.card");
   const plots = [conv, frontEl];
   let front = null;
+  let metricsTimer = null;
   let selected = null;
   let lastGen = null;
   let generations = [];
@@ -98,34 +102,72 @@ export async function render(main, jobId) {
     frontPlot(frontEl, front, pick);
     drawFrontTable();
     drawMetrics(result);
+    if (front.point_metrics === "pending") metricsTimer = setTimeout(() => reloadPointMetrics(job).catch(() => {}), METRICS_RETRY_MS);
     const first = front.best_index ?? (front.points[0] && front.points[0].index);
     if (first !== undefined && first !== null) pick({ kind: "point", index: first });
+  }
+
+  // The points' metrics are decoded on the server the first time the front is asked for; a
+  // large front answers "pending" first: ask again, then redraw the table (selection kept).
+  async function reloadPointMetrics(job) {
+    const f = await api(`/jobs/${job.id}/front`);
+    if (!alive) return;
+    if (f.point_metrics === "pending") {
+      metricsTimer = setTimeout(() => reloadPointMetrics(job).catch(() => {}), METRICS_RETRY_MS);
+      return;
+    }
+    front = f;
+    drawFrontTable();
+    markSelected();
   }
 
   function drawFrontTable() {
     clear(frontTable);
     const o = front.objectives;
     const nx = Math.min(front.variables.length, 12);
-    frontTable.append(h("thead", h("tr", h("th", "#"), o.map((q) => h("th.num", q.axis)),
-      front.variables.slice(0, nx).map((v) => h("th.num", v.label)))));
+    // metric columns: readable name and unit (the key on hover), those some point has, but
+    // not an objective again (its column is there already)
+    const objectiveNames = new Set(o.map((q) => q.name));
+    const ms = front.metrics.filter((q) => !objectiveNames.has(q.name)
+      && front.points.some((p) => p.metrics && q.name in p.metrics));
+    const note = front.point_metrics === "pending" ? "metrics: being computed…"
+      : front.point_metrics === "unavailable" ? `metrics unavailable: ${front.point_metrics_note || ""}` : null;
+    frontTable.append(h("thead",
+      note ? h("tr", h("th.muted", { colSpan: 1 + o.length + ms.length + nx }, note)) : null,
+      h("tr", h("th", "#"), o.map((q) => h("th.num", q.axis)),
+        ms.map((q) => h("th.num.metric", { title: q.name, dataset: { metric: q.name } }, q.axis)),
+        front.variables.slice(0, nx).map((v) => h("th.num", v.label)))));
     const body = h("tbody");
     for (const p of front.points) {
+      const pm = p.metrics || {};
       const tr = h("tr.clickable", { dataset: { point: p.index } }, h("td", String(p.index)),
-        p.objectives.map((v) => h("td.num", num(v))), p.x.slice(0, nx).map((v) => h("td.num", num(v))));
+        p.objectives.map((v) => h("td.num", num(v))), ms.map((q) => h("td.num", num(pm[q.name]))),
+        p.x.slice(0, nx).map((v) => h("td.num", num(v))));
       tr.addEventListener("click", () => pick({ kind: "point", index: p.index }));
       body.append(tr);
     }
     for (const b of front.baselines) {
       const tr = h("tr.clickable", { dataset: { baseline: b.name } }, h("td", h("em", `baseline ${b.name}`)),
-        b.objectives.map((v) => h("td.num", num(v))), front.variables.slice(0, nx).map(() => h("td")));
+        b.objectives.map((v) => h("td.num", num(v))), ms.map((q) => h("td.num", num(b.metrics[q.name]))),
+        front.variables.slice(0, nx).map(() => h("td")));
       tr.addEventListener("click", () => pick({ kind: "baseline", name: b.name }));
       body.append(tr);
     }
     for (const p of (front.paper && front.paper.marks) || []) {
       body.append(h("tr.paper", { dataset: { paper: p.label } }, h("td", h("em", `${p.label} (${front.paper.source})`)),
-        p.objectives.map((v) => h("td.num", num(v))), front.variables.slice(0, nx).map(() => h("td"))));
+        p.objectives.map((v) => h("td.num", num(v))), ms.map(() => h("td")), front.variables.slice(0, nx).map(() => h("td"))));
     }
     frontTable.append(body);
+  }
+
+  function markSelected() {
+    for (const tr of frontTable.querySelectorAll("tr.selected")) tr.classList.remove("selected");
+    const sel = selected;
+    if (!sel) return null;
+    const row = sel.kind === "point" ? frontTable.querySelector(`tr[data-point="${sel.index}"]`)
+      : frontTable.querySelector(`tr[data-baseline="${CSS.escape(sel.name)}"]`);
+    if (row) row.classList.add("selected");
+    return row;
   }
 
   function drawMetrics(result) {
@@ -163,10 +205,8 @@ export async function render(main, jobId) {
 
   async function pick(sel) {
     selected = sel;
-    for (const tr of frontTable.querySelectorAll("tr.selected")) tr.classList.remove("selected");
-    const row = sel.kind === "point" ? frontTable.querySelector(`tr[data-point="${sel.index}"]`)
-      : frontTable.querySelector(`tr[data-baseline="${CSS.escape(sel.name)}"]`);
-    if (row) { row.classList.add("selected"); row.scrollIntoView({ block: "nearest" }); }
+    const row = markSelected();
+    if (row) row.scrollIntoView({ block: "nearest" });
     frontPlot(frontEl, front, pick, sel);
     const title = sel.kind === "point" ? `front point ${sel.index}` : `baseline ${sel.name}`;
     fill(motionCard, h("h2", `Motion of ${title}`), h("p.muted", "decoding…"));
@@ -176,7 +216,7 @@ export async function render(main, jobId) {
       if (selected !== sel || !alive) return;
       drawMotion(motion, title);
       if (sel.kind === "point") viewer.open(`/jobs/${jobId}/pareto/${sel.index}/recording`, `${title} of ${shortId(jobId)}`);
-      else viewer.open(`/jobs/${jobId}/recording`, `job ${shortId(jobId)} (baselines inside)`);
+      else viewer.open(`/jobs/${jobId}/baselines/${encodeURIComponent(sel.name)}/recording`, `${title} of ${shortId(jobId)}`);
     } catch (err) {
       fill(motionCard, h("h2", `Motion of ${title}`), h("p.error", err.message));
     }
@@ -201,5 +241,5 @@ export async function render(main, jobId) {
   }
 
   await refresh();
-  return () => { alive = false; clearTimeout(timer); plots.forEach(purge); };
+  return () => { alive = false; clearTimeout(timer); clearTimeout(metricsTimer); plots.forEach(purge); };
 }
