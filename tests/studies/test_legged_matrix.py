@@ -2,13 +2,18 @@
 physical checks, or the refusal naming the missing capability.
 
 - ``swing_energy``: the foot starts and ends at the requested positions (1e-6 m, by Pinocchio
-  FK of the decoded joints), and the mechanical energy is at least the total variation of the
-  leg's mechanical energy (its gravity/inertia bound).
+  FK of the decoded joints), the torques are Pinocchio's RNEA, and the mechanical energy is at
+  least the variation of the leg's mechanical energy by the same quadrature (its
+  gravity/inertia bound).
 - ``quadruped_gait``: every foot follows its target (1e-6 m) with the stance feet on the
   ground, and each leg's energy is at least the variation of its mechanical energy (the
   ground reactions are vertical on feet that move horizontally: they do no work).
-- ``hexapod_workspace``: no robot here has six legs — each is refused by name; the parametric
-  and URDF hexapods run in tests/legcore/problems/test_hexapod_workspace.py.
+- ``hexapod_workspace``: no robot here has six legs — each is refused by name; a URDF hexapod
+  runs here with the feet-fixed check, the parametric one in
+  tests/legcore/problems/test_hexapod_workspace.py.
+
+The checks live in :mod:`tests.studies.checks`; tests/studies/test_service_studies.py applies
+them to the same kinds run through the real service.
 """
 
 from __future__ import annotations
@@ -17,13 +22,13 @@ import json
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
 import pytest
 
 import legcore
 from legcore.robots import LeggedRobot
+from legcore.runner import prepare
+from tests.studies.checks import check_gait, check_hexapod, check_swing
 from tests.studies.conftest import refusal_message
-from tests.studies.physics import energy_variation, tool_positions
 
 SpecOf = Callable[[str], dict[str, Any]]
 
@@ -51,17 +56,9 @@ def test_swing_energy_on_real_legs(name: str, robot_spec: SpecOf, built_robot: A
                      "budget": {"generations": 3}, "seed": 2})
     json.dumps(r.to_dict(), allow_nan=False)
     robot = built_robot(name)
-    chain = robot.leg(leg).robot if isinstance(robot, LeggedRobot) else robot
+    assert isinstance(robot, LeggedRobot) == (leg is not None)
     for sol in (r.best, r.baselines["calderon2008_parabolic"]):
-        m = sol.motion
-        assert m is not None and m.qd is not None
-        feet = tool_positions(chain, m.q[[0, -1]])  # Pinocchio, in the leg's base frame
-        np.testing.assert_allclose(feet, [start, end], atol=1e-6)
-        assert sol.metrics["energy_total"] >= 0.98 * energy_variation(chain, m.q, m.qd) - 1e-9
-        if leg is not None:  # drawn on the body: the motion is the leg's, at its hip
-            hip = robot.leg(leg).hip[:3, 3]
-            assert m.legs == (leg,) and m.robot == robot.name
-            np.testing.assert_allclose(m.tool[[0, -1]] - hip, [start, end], atol=1e-6)
+        check_swing(robot, leg, sol, start, end)
     assert r.best.metrics["on_grid"] == 1.0
 
 
@@ -87,24 +84,7 @@ def test_quadruped_gait_on_real_quadrupeds(name: str, preset: SpecOf, built_robo
     r = legcore.run(spec)
     json.dumps(r.to_dict(), allow_nan=False)
     sol = r.baselines["default_step"]
-    assert sol.metrics["reachable"] == 1.0
-    m = sol.motion
-    assert m is not None and m.qd is not None
-    robot = built_robot(name)
-    feet_body = m.scene["feet"] - m.scene["body_position"][:, None, :]
-    col = 0
-    for j, leg_name in enumerate(m.legs):
-        leg = robot.leg(leg_name)
-        n = leg.robot.nq
-        q, qd = m.q[:, col:col + n], m.qd[:, col:col + n]
-        np.testing.assert_allclose(leg.foot_in_body(tool_positions(leg.robot, q)),
-                                   feet_body[:, j], atol=1e-6)
-        bound = energy_variation(leg.robot, q, qd)
-        assert sol.metrics[f"energy_{leg_name}_J"] >= 0.98 * bound - 1e-9, (leg_name, bound)
-        col += n
-    sup = m.scene["support"]
-    np.testing.assert_allclose(m.scene["feet"][..., 2][sup], 0.0, atol=1e-9)
-    assert sol.metrics["energy_per_cycle_J"] > 0.0
+    check_gait(built_robot(name), sol)
     assert set(sol.extra["ik"].values()) == {"numerical (legcore.ik.solve)"}
 
 
@@ -130,3 +110,21 @@ def test_hexapod_workspace_refuses_what_is_not_a_hexapod(
 ) -> None:
     msg = refusal_message({"robot": robot_spec(name), "problem": {"kind": "hexapod_workspace"}})
     assert msg.startswith("robot:") and why in msg
+
+
+def test_hexapod_workspace_on_a_urdf_hexapod() -> None:
+    """A parametric hexapod written as URDF (numerical FK/IK): the optimum's and the baselines'
+    motions keep the stance feet where they started (Pinocchio FK, 1e-6 m)."""
+    from legcore.problems.hexapod_workspace_robot import HexapodGeometry, hexapod_urdf
+
+    spec = {"robot": {"kind": "urdf", "name": "hexapod", "legs": "auto",
+                      "urdf": hexapod_urdf(HexapodGeometry(link_lengths=(0.03, 0.08, 0.12)))},
+            "problem": {"kind": "hexapod_workspace", "paper_baselines": False,
+                        "pose_x_extent": 0.04, "pose_xy_step": 0.004, "pose_y_extent": 0.04,
+                        "pose_yaw_step": 0.2617993877991494},
+            "optimizer": {"kind": "moead", "params": {"n_subproblems": 30}},
+            "budget": {"generations": 3}, "seed": 1, "record": False}
+    problem = prepare(spec).problem
+    r = legcore.run(spec)
+    checked = [check_hexapod(problem, sol) for sol in (r.best, *r.baselines.values())]
+    assert set(r.baselines) == {"start", "straight_walk"} and all(checked)

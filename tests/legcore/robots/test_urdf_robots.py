@@ -178,3 +178,59 @@ def test_legs_auto_leaves_an_arm_out_and_says_which_joints_to_lock(erd_urdf: Urd
     robot = build_any_robot({"kind": "urdf", "name": "ak", "urdf": urdf, "legs": "auto",
                              "locked_joints": dict.fromkeys(arm)})  # fmt: skip
     assert sorted(leg.name for leg in robot.legs) == ["LF", "LH", "RF", "RH"]
+
+
+def test_anymal_named_legs_equal_legs_auto(erd_urdf: Urdf) -> None:
+    """ANYmal with its legs named by foot frame (the file's ``LF_FOOT`` … links), and by hip
+    joint + foot, builds the same robot as ``legs: auto``: same legs in the same order, same
+    joints, hips, foot frames, masses, limits, kinematics and dynamics. (Named legs keep the
+    order they are written in; ``auto`` takes them in the model's joint order.)"""
+    text = erd_urdf("anymal")
+    auto = build_any_robot({"kind": "urdf", "name": "anymal", "urdf": text, "legs": "auto"})
+    by_foot = {n: {"foot": f"{n}_FOOT"} for n in ("LF", "LH", "RF", "RH")}  # the model's order
+    by_hip_and_foot = {n: {"hip": f"{n}_HAA", "foot": f"{n}_FOOT"} for n in by_foot}
+    rng = np.random.default_rng(11)
+    q, qd, qdd = rng.uniform(-1.0, 1.0, (3, 4, 3))
+    assert isinstance(auto, LeggedRobot)
+    for legs in (by_foot, by_hip_and_foot):
+        named = build_any_robot({"kind": "urdf", "name": "anymal", "urdf": text, "legs": legs})
+        assert isinstance(named, LeggedRobot)
+        assert [leg.name for leg in named.legs] == [leg.name for leg in auto.legs]
+        assert named.body_mass == auto.body_mass and named.body_size == auto.body_size
+        assert named.model is not None and auto.model is not None
+        assert list(named.model.names) == list(auto.model.names)
+        for k, (a, b) in enumerate(zip(auto.legs, named.legs, strict=True)):
+            ra, rb = a.robot, b.robot
+            assert b.robot.meta["tool_source"] == a.robot.meta["tool_source"] == f"{a.name}_FOOT"
+            assert list(rb.model.names) == list(ra.model.names)
+            np.testing.assert_array_equal(b.hip, a.hip)
+            np.testing.assert_array_equal(rb.chain.mass, ra.chain.mass)
+            for lim in ("q_min", "q_max", "qd_max", "tau_max"):
+                np.testing.assert_array_equal(getattr(rb, lim), getattr(ra, lim))
+            np.testing.assert_array_equal(fk(rb, q[k]), fk(ra, q[k]))
+            np.testing.assert_array_equal(inverse_dynamics(rb, q[k], qd[k], qdd[k]),
+                                          inverse_dynamics(ra, q[k], qd[k], qdd[k]))
+
+
+@pytest.mark.parametrize(("name", "default", "chosen"),
+                         [("z1", "gripperMover", "gripperStator"), ("so100", "jaw", "gripper")])
+def test_locked_fingers_end_at_the_farthest_leaf_unless_tool_frame(
+    name: str, default: str, chosen: str, erd_urdf: Urdf
+) -> None:
+    """docs/robots.md "Limits": with the gripper locked the default end is the farthest leaf —
+    a finger link — and ``tool_frame`` puts it where the user means (Pinocchio on the file)."""
+    extra, n, _ = ARMS[name]
+    text = erd_urdf(name)
+    robot = build_robot({"kind": "urdf", "name": name, "urdf": text, **extra})
+    assert robot.meta["tool_source"] == default
+    chosen_robot = build_robot({"kind": "urdf", "name": name, "urdf": text, **extra,
+                                "tool_frame": chosen})
+    assert chosen_robot.meta["tool_source"] == chosen
+    full, data = _full(text)
+    names = list(robot.model.names)[1:]
+    q = np.random.default_rng(5).uniform(-1.0, 1.0, n)
+    pin.framesForwardKinematics(full, data, _full_q(full, dict(zip(names, q, strict=True))))
+    for rb, frame in ((robot, default), (chosen_robot, chosen)):
+        np.testing.assert_allclose(fk(rb, q), data.oMf[_body(full, frame)].homogeneous,
+                                   atol=1e-12)
+    assert not np.allclose(fk(robot, q)[:3, 3], fk(chosen_robot, q)[:3, 3], atol=1e-3)
