@@ -12,7 +12,12 @@ checks every JSON body once, before any route (or anything recursive) sees it:
 - a non-finite number -> 422 ``finite_number`` located at each such value
   (``["body", "seeds", 0]``);
 - an integer literal longer than Python converts (4300 digits) or bytes that are not UTF-8
-  -> 422 ``json_invalid`` (FastAPI would answer 400 without a location).
+  -> 422 ``json_invalid`` (FastAPI would answer 400 without a location);
+- a NUL character (``\\u0000``) in any string or key -> 422 ``nul_character`` at each: no
+  field has a use for it and PostgreSQL's text cannot store it (psycopg raises, which was a 500).
+
+The same NUL rule covers every request, JSON or not: a NUL in the path (``/jobs/%00x``) is a 404
+(no id holds one), in a query parameter a 422 at ``["query", name]``.
 
 Malformed JSON is left to FastAPI (its 422 ``json_invalid`` names the character position).
 Bodies are JSON when their ``Content-Type`` is ``application/json`` or ``application/*+json``,
@@ -83,6 +88,33 @@ def _is_non_finite(value: Any) -> bool:
     return type(value) is float and not math.isfinite(value)
 
 
+_NUL_MESSAGE = "contains a NUL character (\\u0000), which no field accepts: remove it"
+
+
+def _has_nul(value: Any) -> bool:
+    return type(value) is str and "\x00" in value
+
+
+def _nul_errors(doc: Any) -> list[dict[str, Any]]:
+    """An error at every string value or object key of ``doc`` holding a NUL (in order)."""
+    errors: list[dict[str, Any]] = []
+    if _has_nul(doc):
+        return [_error((), _NUL_MESSAGE, "nul_character")]
+    stack: list[tuple[Any, Loc]] = [(doc, ())] if isinstance(doc, dict | list) else []
+    while stack and len(errors) < MAX_ERRORS:
+        node, loc = stack.pop()
+        nested: list[tuple[Any, Loc]] = []
+        for key, value in _children(node):
+            if _has_nul(key):
+                errors.append(_error((*loc, key), _NUL_MESSAGE, "nul_character"))
+            if isinstance(value, dict | list):
+                nested.append((value, (*loc, key)))
+            elif _has_nul(value):
+                errors.append(_error((*loc, key), _NUL_MESSAGE, "nul_character"))
+        stack.extend(reversed(nested))
+    return errors[:MAX_ERRORS]
+
+
 def _needs_report(doc: Any, max_depth: int) -> bool:
     """Fast pass (no locations): does ``doc`` nest too deep or hold a non-finite number?"""
     if _is_non_finite(doc):
@@ -137,9 +169,10 @@ def check_json_body(body: bytes, max_depth: int = MAX_JSON_DEPTH) -> list[dict[s
         return [_error((exc.start,), msg, "json_invalid")]
     except ValueError as exc:  # an integer literal over sys.get_int_max_str_digits()
         return [_error((), f"JSON number out of range: {exc}", "json_invalid")]
-    if not _needs_report(doc, max_depth):
-        return []
-    return _locate(doc, max_depth)
+    errors = _locate(doc, max_depth) if _needs_report(doc, max_depth) else []
+    if not errors and b"\\u0000" in body:  # JSON escapes every NUL in a string this way
+        errors = _nul_errors(doc)
+    return errors
 
 
 class JsonGuardMiddleware:
@@ -151,6 +184,12 @@ class JsonGuardMiddleware:
         self.max_depth = int(max_depth)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] == "http" and "\x00" in scope.get("path", ""):
+            await _send_json(send, 404, {"detail": "not found: no id contains a NUL character"})
+            return
+        if scope["type"] == "http" and (query := _nul_query_errors(scope)):
+            await _send_422(send, query)
+            return
         if scope["type"] != "http" or not is_json_content_type(_content_type(scope)):
             await self.app(scope, receive, send)
             return
@@ -197,14 +236,33 @@ def _replay(chunks: list[bytes], pending: Message | None, receive: Receive) -> R
     return replay
 
 
+def _nul_query_errors(scope: Scope) -> list[dict[str, Any]]:
+    """A 422 error per query parameter whose name or value holds a NUL."""
+    raw = bytes(scope.get("query_string", b""))
+    if b"%00" not in raw and b"\x00" not in raw:
+        return []
+    from urllib.parse import parse_qsl
+
+    pairs = parse_qsl(raw.decode("latin-1"), keep_blank_values=True)
+    return [
+        {"type": "nul_character", "loc": ["query", name.replace("\x00", "")],
+         "msg": _NUL_MESSAGE}
+        for name, value in pairs if "\x00" in name or "\x00" in value
+    ][:MAX_ERRORS]  # fmt: skip
+
+
 async def _send_422(send: Send, errors: list[dict[str, Any]]) -> None:
+    await _send_json(send, 422, {"detail": errors})
+
+
+async def _send_json(send: Send, status: int, doc: Any) -> None:
     body = json.dumps(
-        {"detail": errors}, ensure_ascii=False, allow_nan=False, separators=(",", ":")
+        doc, ensure_ascii=False, allow_nan=False, separators=(",", ":")
     ).encode("utf-8")
     await send(
         {
             "type": "http.response.start",
-            "status": 422,
+            "status": status,
             "headers": [
                 (b"content-type", b"application/json"),
                 (b"content-length", str(len(body)).encode()),

@@ -4,7 +4,8 @@ package (database, broker and API; each test starts and stops its own workers), 
 
 Kinds as in tests/integration/conftest.py: ``embedded`` (SQLite + filesystem broker) always,
 ``services`` (a fresh PostgreSQL database + a private Redis) when PostgreSQL answers on
-127.0.0.1:5432 and ``redis-server`` is installed; otherwise skipped with the reason.
+127.0.0.1:5432 and ``redis-server`` is installed; otherwise skipped with the reason — or,
+where ``LEGOPT_REQUIRE_SERVICES=1`` (CI), failed with it (``ChaosRedis.start``).
 The stack's leases are short (4 s lease, 1 s heartbeat, checkpoint every generation).
 Teardown of the stack checks that no process it started (or a descendant) survives it.
 """

@@ -7,6 +7,11 @@
 - ``services``: a fresh PostgreSQL database on 127.0.0.1:5432 and a private ``redis-server`` on a
   free port (skipped where PostgreSQL or the redis-server binary is absent).
 
+In-process tests that need only a database take ``DATABASES`` (``sqlite``, ``postgresql``) and
+``service_database``. ``LEGOPT_REQUIRE_SERVICES=1`` (CI sets it in ``.ci/run``) turns every
+such skip into a failure naming what is missing: the PostgreSQL + Redis variants never silently
+skip where they are required.
+
 Leases are short (4 s) and every generation is checkpointed so that recovery tests run fast.
 """
 
@@ -22,8 +27,9 @@ import time
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
+from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import httpx
 import pytest
@@ -43,7 +49,18 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
+#: Set to 1 where the PostgreSQL + Redis tests must run (CI): a missing service fails them.
+REQUIRE_SERVICES_ENV = "LEGOPT_REQUIRE_SERVICES"
+
+
+def services_required() -> bool:
+    """``LEGOPT_REQUIRE_SERVICES=1``: a missing PostgreSQL or redis-server fails, never skips."""
+    return os.environ.get(REQUIRE_SERVICES_ENV) == "1"
+
+
+@lru_cache(maxsize=1)
 def postgres_available() -> bool:
+    """Whether the PostgreSQL server at ``LEGOPT_TEST_POSTGRES_URL`` answers (probed once)."""
     try:
         import psycopg
 
@@ -58,26 +75,78 @@ def redis_server_binary() -> str | None:
     return shutil.which("redis-server")
 
 
+def postgres_missing() -> str | None:
+    """Why the PostgreSQL tests cannot run here (None: they can)."""
+    if postgres_available():
+        return None
+    return f"no PostgreSQL server answers at {PG_ADMIN_URL} (LEGOPT_TEST_POSTGRES_URL)"
+
+
+def services_missing() -> str | None:
+    """Why the ``services`` stack (PostgreSQL + redis-server) cannot run here (None: it can)."""
+    reasons = [r for r in (postgres_missing(),) if r is not None]
+    if redis_server_binary() is None:
+        reasons.append("redis-server is not installed (apt-get install redis-server)")
+    return "; ".join(reasons) or None
+
+
 def services_available() -> bool:
-    return postgres_available() and redis_server_binary() is not None
+    """Whether the ``services`` stack can run here. Where it cannot, its tests are skipped —
+    unless ``LEGOPT_REQUIRE_SERVICES=1``: then they run and fail naming what is missing
+    (``KINDS``, ``require_services``)."""
+    return services_missing() is None
+
+
+def unavailable(reason: str) -> NoReturn:
+    """Skip the current test because ``reason``, or fail it where ``LEGOPT_REQUIRE_SERVICES=1``."""
+    if services_required():
+        pytest.fail(
+            f"{REQUIRE_SERVICES_ENV}=1 requires the PostgreSQL + Redis tests to run here, but "
+            f"{reason}",
+            pytrace=False,
+        )
+    pytest.skip(reason)
+
+
+def require_postgres() -> None:
+    """Skip (or, where required, fail) the current test when PostgreSQL does not answer."""
+    reason = postgres_missing()
+    if reason is not None:
+        unavailable(reason)
+
+
+def require_services() -> None:
+    """Skip (or, where required, fail) the current test when PostgreSQL or redis-server is
+    missing."""
+    reason = services_missing()
+    if reason is not None:
+        unavailable(reason)
+
+
+def when_available(value: Any, missing: str | None, *, id: str | None = None) -> Any:
+    """A ``pytest.param`` of ``value``: skipped with ``missing`` as the reason where that is
+    not None — but never where ``LEGOPT_REQUIRE_SERVICES=1``: there the test runs, and its
+    fixture (``postgres_database``, ``RedisServer.start``, ``service_database``) fails naming
+    what is missing."""
+    marks = [] if missing is None or services_required() else [pytest.mark.skip(reason=missing)]
+    return pytest.param(value, marks=marks, id=id)
 
 
 #: The stack kinds a service test runs on: ``embedded`` always, ``services`` (PostgreSQL +
-#: Redis) where both are available (skipped with the reason otherwise).
-KINDS = [
-    "embedded",
-    pytest.param(
-        "services",
-        marks=pytest.mark.skipif(
-            not services_available(), reason="PostgreSQL on 127.0.0.1:5432 or redis-server absent"
-        ),
-    ),
-]
+#: Redis) where both are available (skipped with the reason otherwise; a failure where
+#: ``LEGOPT_REQUIRE_SERVICES=1``).
+KINDS = ["embedded", when_available("services", services_missing())]
+
+#: The databases an in-process API test runs on (``service_database``): ``sqlite`` always,
+#: ``postgresql`` as the ``services`` kind above.
+DATABASES = ["sqlite", when_available("postgresql", postgres_missing())]
 
 
 @contextmanager
 def postgres_database() -> Iterator[str]:
-    """A fresh PostgreSQL database (dropped afterwards); yields its SQLAlchemy URL."""
+    """A fresh PostgreSQL database (dropped afterwards); yields its SQLAlchemy URL. Skips the
+    test (fails it where ``LEGOPT_REQUIRE_SERVICES=1``) when PostgreSQL does not answer."""
+    require_postgres()
     import psycopg
 
     admin = PG_ADMIN_URL.replace("postgresql+psycopg://", "postgresql://")
@@ -92,6 +161,21 @@ def postgres_database() -> Iterator[str]:
             conn.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
 
 
+@contextmanager
+def service_database(kind: str, directory: Path) -> Iterator[str]:
+    """An empty database of ``kind`` (``DATABASES``) for an in-process test; yields its URL:
+    ``sqlite``, a new file in ``directory``; ``postgresql``, a fresh database
+    (``postgres_database``: dropped afterwards, skipped or failed as there)."""
+    if kind == "sqlite":
+        directory.mkdir(parents=True, exist_ok=True)
+        yield f"sqlite:///{(directory / 'legopt.db').as_posix()}"
+    elif kind == "postgresql":
+        with postgres_database() as url:
+            yield url
+    else:
+        raise ValueError(f"unknown database kind {kind!r} (sqlite or postgresql)")
+
+
 class RedisServer:
     """A private redis-server on a free port (restartable; keeps nothing on disk)."""
 
@@ -101,6 +185,9 @@ class RedisServer:
         self.proc: subprocess.Popen[bytes] | None = None
 
     def start(self) -> None:
+        """Start (or restart) the server; skips the test (fails it where
+        ``LEGOPT_REQUIRE_SERVICES=1``) when PostgreSQL or redis-server is missing."""
+        require_services()
         binary = redis_server_binary()
         assert binary is not None
         self.proc = subprocess.Popen(

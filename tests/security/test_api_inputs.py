@@ -4,6 +4,8 @@ pose-grid step (``extent / 1e-320`` overflows), NaN / Infinity / 1e309 anywhere 
 nesting 65 to 100 000 levels deep, oversized bodies, absurd job sizes; and amplification: a
 sweep of an inline URDF robot builds it once (not twice per job), points share the base instead
 of deep-copying it, and a sweep building many distinct large robots is refused.
+
+The API tests run on both databases (``db_settings``: SQLite, and PostgreSQL where it answers).
 """
 
 from __future__ import annotations
@@ -29,7 +31,6 @@ from services.api.body_limit import DEFAULT_MAX_BODY_BYTES
 from services.api.deps import ApiContext
 from services.api.sweeps import expand, set_path
 from services.api.validation import check_job_spec
-from services.store import migrate
 from services.store.keys import generate_api_key
 from services.store.repository import create_api_key
 from services.store.settings import Settings
@@ -55,10 +56,8 @@ class Api:
 
 
 @pytest.fixture(scope="module")
-def api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Api]:
-    data: Path = tmp_path_factory.mktemp("api-inputs")
-    migrate.upgrade(f"sqlite:///{(data / 'legopt.db').as_posix()}")
-    app = create_app(Settings.from_env(env={}, data_dir=data), enqueue=lambda _job_id: None)
+def api(db_settings: Settings) -> Iterator[Api]:
+    app = create_app(db_settings, enqueue=lambda _job_id: None)
     ctx: ApiContext = app.state.context
     raw, key_hash = generate_api_key()
     with ctx.write() as session:
@@ -230,6 +229,48 @@ def test_sweep_over_the_job_limit_is_422(api: Api) -> None:
     body = {"base": {"problem": {"kind": "path_tracking"}}, "grid": {"seed": list(range(1001))}}
     r = api.post("/sweeps", json.dumps(body))
     assert r.status_code == 422 and "limit" in r.json()["detail"][0]["msg"]
+
+
+NUL = "\x00"
+
+
+def test_nul_characters_in_ids_and_queries_are_never_500(api: Api) -> None:
+    """PostgreSQL text cannot hold a NUL character (psycopg raises ``DataError`` before the
+    query runs) where SQLite stores it: an id, a query parameter or a name holding one must be
+    refused or not found on both databases, never a 500."""
+    schema = api.client.get(f"{API}/openapi.json").json()
+    failures = []
+    for path, operations in schema["paths"].items():
+        for method, op in operations.items():
+            params = op.get("parameters", [])
+            names = [p["name"] for p in params if p["in"] == "path"]
+            real = path
+            for name in names:
+                real = real.replace(f"{{{name}}}", "00000000-0000-4000-8000-000000000000")
+            calls: list[tuple[str, dict[str, str]]] = []
+            if names:
+                url = path
+                for name in names:
+                    url = url.replace(f"{{{name}}}", "%00x")  # NUL, percent-encoded
+                calls.append((url, {}))
+            if method == "get":
+                calls += [(real, {p["name"]: NUL}) for p in params if p["in"] == "query"]
+            for url, query in calls:
+                r = api.client.request(method.upper(), url, params=query, headers=api.headers)
+                if r.status_code >= 500:
+                    failures.append(f"{method.upper()} {url!r} {query}: {r.status_code}")
+    bodies = [
+        ("/robots", {"name": f"r{NUL}", "catalog": "puma560"}),
+        ("/jobs", {"problem": {"kind": "path_tracking"}, "robot": f"x{NUL}"}),
+        ("/sweeps", {"base": {"problem": {"kind": "path_tracking"}, "robot": NUL}, "seeds": [1]}),
+    ]
+    for path, body in bodies:
+        r = api.post(path, json.dumps(body))
+        if r.status_code >= 500:
+            failures.append(f"POST {path} {json.dumps(body)}: {r.status_code}")
+    assert not failures, f"{len(failures)} requests with a NUL answered 5xx:\n" + "\n".join(
+        failures
+    )
 
 
 def test_api_answers_after_the_hostile_inputs(api: Api) -> None:
