@@ -286,3 +286,74 @@ def test_tripod_stability_nearly_parallel_diagonal_is_unbounded_not_a_number() -
     # a merely slanted diagonal stays a finite distance
     sf2, _ = tripod_stability(np.array([0.3, 0.2]), middle, back, c=np.array([0.0, -0.05]))
     assert np.isfinite(sf2) and sf2 > 0
+
+
+# ---------------------------------------------------------------- unbounded margins in results
+
+
+def _numbers_under(doc: object, keys: set[str]) -> list[tuple[str, object]]:
+    """Every (key, value) of ``doc`` (nested dicts/lists) whose key is in ``keys``."""
+    out: list[tuple[str, object]] = []
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            if k in keys:
+                out.append((k, v))
+            out.extend(_numbers_under(v, keys))
+    elif isinstance(doc, list):
+        for v in doc:
+            out.extend(_numbers_under(v, keys))
+    return out
+
+
+def test_unbounded_front_distance_is_flagged_and_stored_as_null() -> None:
+    """Issue 11: seed 002's Table 2 c and d have feet 1 and 5 at the same y, so S_f along x is
+    unbounded — once stored as 16 642.8 m. Now the metric carries ``S_f_unbounded = 1`` and the
+    stored result (``RunResult.to_dict``, written as result.json and into the database) has no
+    number for S_f: the key is absent or null, never a finite value."""
+    import json
+
+    import legcore
+
+    spec = {"problem": {"kind": "hexapod_workspace", "pose_xy_step": 0.004},
+            "optimizer": {"kind": "moead", "params": {"n_subproblems": 20}},
+            "budget": {"generations": 2}, "seed": 1}
+    result = legcore.run(spec)
+    for key in ("paper_c", "paper_d"):
+        m = result.baselines[key].metrics
+        assert m["S_f_unbounded"] == 1.0 and m["S_b_unbounded"] == 0.0
+        assert "S_f" not in m or not math.isfinite(m["S_f"])
+        assert math.isfinite(m["S_b"]) and m["stability_margin"] > 0  # the perpendicular margin
+    a = result.baselines["paper_a"].metrics
+    assert a["S_f_unbounded"] == 0.0 and math.isfinite(a["S_f"])
+    doc = json.loads(json.dumps(result.to_dict(), allow_nan=False))  # strict JSON
+    for key in ("paper_c", "paper_d"):
+        stored = doc["baselines"][key]["metrics"]
+        assert stored["S_f_unbounded"] == 1.0 and stored.get("S_f") is None
+    # nowhere in the stored document is a stability distance a huge finite number
+    for k, v in _numbers_under(doc, {"S_f", "S_b"}):
+        vals = v if isinstance(v, list) else [v]
+        assert all(x is None or abs(x) < 1.0 for x in vals), (k, v)
+
+
+def test_airborne_gait_margin_is_flagged_and_stored_as_null() -> None:
+    """Seed 003: a duty factor of 0.2 leaves instants with no foot on the ground; the margin is
+    -inf in memory, ``airborne = 1`` is set, and the stored result has null for it."""
+    import json
+
+    import legcore
+
+    spec = {"robot": "animatronic_quadruped",
+            "problem": {"kind": "quadruped_gait", "duty": 0.2, "duty_bounds": [0.15, 0.9]},
+            "optimizer": {"kind": "hka", "params": {"n_samples": 10, "n_best": 3,
+                                                     "init": "center"}},
+            "budget": {"generations": 1}, "seed": 1}
+    result = legcore.run(spec)
+    m = result.baselines["default_step"].metrics
+    assert m["airborne"] == 1.0 and m["min_stability_margin_m"] == -math.inf
+    assert m["feasible"] == 0.0
+    assert result.baselines["paper_walk"].metrics["airborne"] == 0.0
+    doc = json.loads(json.dumps(result.to_dict(), allow_nan=False))
+    stored = doc["baselines"]["default_step"]["metrics"]
+    assert stored["airborne"] == 1.0 and stored["min_stability_margin_m"] is None
+    walk = doc["baselines"]["paper_walk"]["metrics"]
+    assert walk["airborne"] == 0.0 and isinstance(walk["min_stability_margin_m"], float)

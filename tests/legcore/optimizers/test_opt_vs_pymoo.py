@@ -1,8 +1,10 @@
 """Our MOEA/D and NSGA-II against pymoo's (the reference implementation) on ZDT1.
 
-Same problem object, same budget (100 x 100), same reference point. pymoo's MOEAD evaluates one
-offspring at a time, ours one batch per generation: ours must be several times faster at the
-same hypervolume.
+Like for like (issue 11): same problem object, same budget (100 x 100), same reference point,
+same output set on both sides — the non-dominated feasible part of the final population (our
+MOEA/D with ``archive_size=0``: its external archive off; our NSGA-II at pymoo's
+``prob_mutant=0.9``) — over 10 seeds, with a rank test. pymoo's MOEAD evaluates one offspring
+at a time, ours one batch per generation (counted here; the speed is measured in benchmarks/).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from legcore.optimizers import MaxGenerations, get_algorithm, minimize
 from legcore.problems.benchmarks import ZDT1
 
 REF = np.array([1.1, 1.1])
-SEEDS = (0, 1)
+SEEDS = tuple(range(10))
 
 
 class _AsPymoo(PymooProblem):
@@ -57,7 +59,9 @@ def _pymoo(kind: str, seed: int) -> tuple[float, float]:
 
 
 def _ours(kind: str, seed: int) -> tuple[float, float]:
-    algo = get_algorithm(kind, **({"n_subproblems": 100} if kind == "moead" else {}))
+    params: dict[str, Any] = ({"n_subproblems": 100, "archive_size": 0} if kind == "moead"
+                              else {"prob_mutant": 0.9})  # final population, pymoo's settings
+    algo = get_algorithm(kind, **params)
     problem = _CountedZDT1()
     res = minimize(problem, algo, MaxGenerations(100), seed=seed)
     return problem.calls, hypervolume(res.front_F, REF).value
@@ -66,12 +70,19 @@ def _ours(kind: str, seed: int) -> tuple[float, float]:
 @pytest.mark.slow
 @pytest.mark.parametrize("kind", ["nsga2", "moead"])
 def test_same_hypervolume_as_pymoo_on_zdt1(kind: str) -> None:
+    """10 seeds each, final population vs final population. Ours must not be significantly
+    below pymoo's (one-sided Mann-Whitney U on the HVs, p >= 0.05), and its mean HV not below
+    pymoo's by more than one of pymoo's seed sd. Measured 2026-11-27 (seeds 0-9): MOEA/D ours
+    0.8238 +- 0.0149, pymoo 0.8283 +- 0.0248 (two-sided p = 0.43); NSGA-II ours 0.8450 +- 0.0035,
+    pymoo 0.8474 +- 0.0040 (p = 0.10)."""
+    from scipy.stats import mannwhitneyu
+
     ours = np.array([_ours(kind, s) for s in SEEDS])
     theirs = np.array([_pymoo(kind, s) for s in SEEDS])
-    hv_ours, hv_theirs = ours[:, 1].mean(), theirs[:, 1].mean()
-    # run-to-run spread of either is ~0.3 % (NSGA-II) and ~3 % (MOEA/D) of the HV
-    tol = 0.015 if kind == "nsga2" else 0.04
-    assert hv_ours > hv_theirs * (1 - tol), (hv_ours, hv_theirs)
+    hv_ours, hv_theirs = ours[:, 1], theirs[:, 1]
+    p = mannwhitneyu(hv_ours, hv_theirs, alternative="less").pvalue
+    assert p >= 0.05, (p, hv_ours, hv_theirs)
+    assert hv_ours.mean() >= hv_theirs.mean() - hv_theirs.std(ddof=1), (hv_ours, hv_theirs)
     assert np.all(ours[:, 0] == 100)  # one batch per generation
     if kind == "moead":  # pymoo's: one evaluation per offspring
         assert np.all(theirs[:, 0] > 50 * 100), theirs[:, 0]

@@ -358,18 +358,37 @@ def test_example_spec_loads_and_runs() -> None:
 
 @pytest.mark.slow
 def test_moead_hypervolume_matches_pymoo_reduced() -> None:
-    """Reduced form of benchmarks/bench_hexapod.py: N = 105 (H = 13), 30 generations, 3 seeds,
-    same problem, operators, neighbourhood and reference point (pymoo: ~1.2 s per run)."""
+    """Reduced form of benchmarks/bench_hexapod.py, like for like (issue 11): N = 105 (H = 13),
+    30 generations, seeds 0-9, the same problem, weights, operators, neighbourhood and reference
+    point; both fronts are the non-dominated part of the *final population* (ours with
+    ``archive_size=0``: no external archive). The problem's true front is a single point, so the
+    per-seed HV spread is large (HV/box sd ~0.10 ours, ~0.15 pymoo's); the honest check is a rank
+    test, not a ratio of means: ours must not be significantly below pymoo's (one-sided
+    Mann-Whitney U, p >= 0.05), and its mean not below pymoo's by more than one of pymoo's
+    seed sd. 2026-11-27: ours 0.915 +- 0.102, pymoo 0.882 +- 0.150, two-sided
+    p = 0.85. (Our archive, the earlier comparison, gave 0.955 +- 0.055: not like for like.)"""
     import sys
+
+    from scipy.stats import mannwhitneyu
+
+    from legcore.metrics import hypervolume
 
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
-        from bench_hexapod import compare
+        from bench_hexapod import REF, make_problem, run_pymoo
     finally:
         sys.path.pop(0)
-    res = compare([0, 1, 2], 100, 30, which=("ours moead", "pymoo moead"))
-    ours, theirs = res["ours moead"], res["pymoo moead"]
-    assert ours[:, 1].mean() >= 0.95 * theirs[:, 1].mean(), (ours[:, 1], theirs[:, 1])
+    seeds, pop, gen = range(10), 100, 30
+    ours, theirs = [], []
+    for s in seeds:
+        algo = get_algorithm("moead", n_subproblems=pop, n_neighbors=20, archive_size=0)
+        res = minimize(make_problem(), algo, MaxGenerations(gen), seed=s)
+        assert algo.pop_size == 105 and len(res.front_F) <= algo.pop_size
+        ours.append(hypervolume(np.asarray(res.front_F), REF).value)
+        theirs.append(hypervolume(run_pymoo("moead", s, pop, gen)[1], REF).value)
+    p = mannwhitneyu(ours, theirs, alternative="less").pvalue
+    assert p >= 0.05, (p, ours, theirs)
+    assert np.mean(ours) >= np.mean(theirs) - np.std(theirs, ddof=1), (ours, theirs)
     # the speed is measured by benchmarks/bench_hexapod.py, not asserted here
 
 
