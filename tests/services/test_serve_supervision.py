@@ -229,6 +229,10 @@ def test_killed_workers_are_restarted_files_private_sigterm_exits_0(
         serve.log,
     )
     text = serve.log.read_text(errors="replace")
+    # serve tells the user where the dashboard is (issue 10): its own address, the API and docs
+    assert f"LegOpt dashboard on {serve.url}/  (API {serve.url}/api/v1, docs /api/v1/docs" in (
+        text
+    ), text[-3000:]
     for v in victims:
         assert f"(pid {v.pid}) was killed by SIGKILL; restarting it" in text, text[-3000:]
     with serve.client() as c:

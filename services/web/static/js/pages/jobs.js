@@ -108,12 +108,15 @@ export async function render(main, _param, hash) {
   function actions(j) {
     const out = [];
     if (!TERMINAL.has(j.status)) {
-      out.push(h("button.danger", { title: "Cancel this job", on: { click: async () => {
-        await api(`/jobs/${j.id}/cancel`, { method: "POST" }); load(); } } }, "Cancel"));
+      out.push(h("button.danger", { title: "Cancel this job", dataset: { action: "cancel" }, on: { click: async (ev) => {
+        ev.target.disabled = true;
+        try { await api(`/jobs/${j.id}/cancel`, { method: "POST" }); } catch (err) { info.textContent = err.message; }
+        load(); } } }, "Cancel"));
     }
-    out.push(h("button.secondary", { title: "Submit the same spec with a new seed", on: { click: async (ev) => {
+    out.push(h("button.secondary", { title: "Submit the same spec with a new seed", dataset: { action: "rerun" }, on: { click: async (ev) => {
       ev.target.disabled = true;
-      const created = await rerun(j.id);
+      let created;
+      try { created = await rerun(j.id); } catch (err) { info.textContent = err.message; ev.target.disabled = false; return; }
       location.hash = `#/job/${created.id}`;
     } } }, "Re-run"));
     return out;

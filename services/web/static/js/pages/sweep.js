@@ -47,6 +47,7 @@ export async function render(main, sweepId) {
     if (!chosen.size) c.cells.slice(0, 4).forEach((cell) => chosen.add(cell.index));
     drawTable();
     await drawFronts();
+    plot.dataset.sweepState = sweep.state; // table and fronts drawn for this state
     if (sweep.state !== "finished") timer = setTimeout(() => load().catch(() => {}), POLL_MS);
   }
 
