@@ -279,6 +279,17 @@ def test_sigterm_mid_job_hands_it_back_and_sigkill_leaves_no_orphan(
 
 
 @pytest.mark.integration
+def test_ctrl_c_stops_serve_and_its_workers(tmp_path: Path, services: list[Service]) -> None:
+    """SIGINT (Ctrl-C in the terminal) stops like SIGTERM: exit 0, no process left."""
+    serve = Serve(tmp_path, log_name="serve-int.log")
+    services.append(serve)
+    serve.wait_ready()
+    assert len(serve.workers()) == 2
+    assert serve.stop(signal.SIGINT) == 0, serve.log.read_text()[-3000:]
+    serve.assert_all_gone()
+
+
+@pytest.mark.integration
 def test_demo_killed_leaves_no_process(tmp_path: Path, services: list[Service]) -> None:
     port = free_port()
     demo = Service(
