@@ -32,7 +32,24 @@ def demo_output(tmp_path_factory: pytest.TempPathFactory) -> str:
     out = subprocess.run(args, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
     assert (data / "legopt.db").exists()
+    left = _processes_of(data)  # issue 8: every `demo` used to leave its two workers running
+    assert not left, f"processes left after the demo exited: {left}"
     return out.stdout
+
+
+def _processes_of(data: Path) -> list[str]:
+    """Live processes whose environment names ``data`` as their data directory."""
+    import psutil
+
+    marker = f"LEGOPT_DATA_DIR={data}".encode()
+    found = []
+    for p in psutil.process_iter(["pid", "cmdline"]):
+        try:
+            if marker in Path(f"/proc/{p.pid}/environ").read_bytes().split(b"\0"):
+                found.append(f"{p.pid} {' '.join(p.info['cmdline'] or [])[:120]}")
+        except (OSError, psutil.Error):
+            continue
+    return found
 
 
 NUMBER = r"\d+(?:\.\d+)?(?:e[-+]?\d+)?"
@@ -111,3 +128,10 @@ def test_multi_objective_study_prints_its_front_size(demo_output: str) -> None:
     assert re.search(r"Pareto front of \d+ points", " ".join(block))
     rows = _rows(block)
     assert sum("minimised" in n for n in rows) == 2  # both objectives, named once each
+
+
+def test_demo_says_where_to_look_next(demo_output: str) -> None:
+    """The demo ends with the dashboard address and the replay command (issue 13)."""
+    tail = demo_output[-2000:]
+    assert re.search(r"open http://127\.0\.0\.1:\d+/\s+the dashboard", demo_output), tail
+    assert re.search(r"legopt replay [0-9a-f]{8} --web", demo_output), tail
