@@ -32,6 +32,20 @@ JOB_COLORS: tuple[tuple[int, int, int], ...] = (
 _COLOR_NAMES = ("blue", "red", "green", "orange", "purple", "brown", "pink", "cyan", "olive",
                 "grey", "navy", "maroon")  # fmt: skip
 
+
+def job_color(i: int) -> tuple[tuple[int, int, int], str]:
+    """The colour (RGB 0-255) and its name of the ``i``-th job of a merged recording: the 12
+    named colours, then hues spread by the golden angle (a merge holds up to 32 jobs; no two
+    share a colour)."""
+    if i < len(JOB_COLORS):
+        return JOB_COLORS[i], _COLOR_NAMES[i]
+    import colorsys
+
+    hue = (i * 0.6180339887) % 1.0
+    r, g, b = colorsys.hsv_to_rgb(hue, 0.55 + 0.3 * (i % 2), 0.75)
+    rgb = (round(r * 255), round(g * 255), round(b * 255))
+    return rgb, f"#{rgb[0]:02x}{rgb[1]:02x}{rgb[2]:02x}"
+
 __all__ = [
     "merge_recordings",
 ]
@@ -110,7 +124,7 @@ def _common_display(paths: Sequence[Path]) -> FrontDisplay | None:
 
 def _legend(parts: Sequence[str]) -> str:
     """Markdown naming each job's colour."""
-    rows = [f"| {_COLOR_NAMES[i % len(_COLOR_NAMES)]} | `{p}` |" for i, p in enumerate(parts)]
+    rows = [f"| {job_color(i)[1]} | `{p}` |" for i, p in enumerate(parts)]
     return "\n".join(["| colour | job |", "|---|---|", *rows])
 
 
@@ -153,7 +167,7 @@ def merge_recordings(
                 if not c.entity_path.startswith("/__")
             )
             best_names = _series_names_of(p, "optimization/best")
-            _colour_job(stream, ents, part, JOB_COLORS[i % len(JOB_COLORS)], best_names)
+            _colour_job(stream, ents, part, job_color(i)[0], best_names)
             if common is not None and f"jobs/{part}/optimization/front" in ents:
                 root = f"jobs/{part}/optimization"
                 for e in ("front", "best_point", "final_front"):

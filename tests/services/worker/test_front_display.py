@@ -79,3 +79,14 @@ def test_merged_recording_colours_and_boxes_jobs_together(tmp_path: Path) -> Non
     assert scales[0] == scales[1]  # one box for both: the overlay compares like with like
     legend = str(values(ents["jobs/legend"], ":text"))
     assert "`a`" in legend and "`b`" in legend and "blue" in legend
+
+
+def test_merged_jobs_never_share_a_colour() -> None:
+    """Up to 32 jobs merge into one recording; each keeps its own colour and legend name."""
+    from services.api.routes.sweeps import MAX_MERGED_JOBS
+    from services.worker.rerun_merge import job_color
+
+    colours = [job_color(i) for i in range(MAX_MERGED_JOBS)]
+    assert len({rgb for rgb, _ in colours}) == MAX_MERGED_JOBS
+    assert len({name for _, name in colours}) == MAX_MERGED_JOBS
+    assert colours[0] == ((31, 119, 180), "blue")
