@@ -42,6 +42,8 @@ DASHBOARD_HEADERS = {
     "Content-Security-Policy": _SELF_ONLY + "script-src 'self' 'unsafe-eval'",
 }
 VIEWER_HEADERS = {**_NO_CACHE, "Content-Security-Policy": _SELF_ONLY + _VIEWER_SCRIPTS}
+#: Swagger UI: FastAPI's page starts the bundle from an inline script.
+DOCS_HEADERS = {"Content-Security-Policy": _SELF_ONLY + "script-src 'self' 'unsafe-inline'"}
 
 
 def viewer_app(settings: Settings) -> Starlette:
@@ -96,7 +98,7 @@ def mount_dashboard(app: FastAPI, settings: Settings, api_prefix: str) -> None:
 
     @app.get(docs, include_in_schema=False)
     def swagger_ui() -> HTMLResponse:
-        return get_swagger_ui_html(
+        page = get_swagger_ui_html(
             openapi_url=app.openapi_url or f"{api_prefix}/openapi.json",
             title=f"{app.title} API",
             swagger_js_url="/static/vendor/swagger-ui/swagger-ui-bundle.js",
@@ -104,6 +106,8 @@ def mount_dashboard(app: FastAPI, settings: Settings, api_prefix: str) -> None:
             swagger_favicon_url="/static/favicon.svg",
             swagger_ui_parameters={"validatorUrl": None},  # no online validator badge
         )
+        page.headers.update(DOCS_HEADERS)  # like the dashboard: nothing but this server
+        return page
 
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     app.mount("/viewer", viewer_app(settings), name="viewer")

@@ -246,6 +246,23 @@ def test_cancel_and_rerun_from_the_jobs_table(page: Any, stack: Stack, ids: dict
     assert {**new["spec"], "seed": None} == {**old["spec"], "seed": None}, (old, new)
     page.goto(f"{stack.url}/#/jobs")
     page.wait_for_selector(f"tr[data-job='{new_id}']")  # listed with the others
+
+    # the job page's own buttons: Re-run a long job from its page, then Cancel the new one there
+    with stack.client() as c:
+        other = c.submit(LONG)["id"]
+    page.goto(f"{stack.url}/#/job/{other}")
+    page.click("button[data-action=rerun]")
+    page.wait_for_function(
+        f"location.hash.startsWith('#/job/') && location.hash !== '#/job/{other}'"
+    )
+    rerun_id = page.evaluate("location.hash").removeprefix("#/job/")
+    page.wait_for_function(f"document.body.innerText.includes('{rerun_id}')")  # its page drawn
+    page.click("button[data-action=cancel]")
+    stack.wait_for(rerun_id, lambda j: j["status"] == "cancelled")
+    with stack.client() as c:
+        c.cancel(other)
+        assert c.job(rerun_id)["spec"]["seed"] != c.job(other)["spec"].get("seed", 0)
+    stack.wait_for(other, lambda j: j["status"] == "cancelled")
     assert not page.legopt_errors, page.legopt_errors
 
 
@@ -345,6 +362,8 @@ def test_nothing_leaves_this_server(page: Any, stack: Stack) -> None:
     dashboard_csp = page.legopt_documents["/"]["content-security-policy"]
     assert "default-src 'self'" in dashboard_csp and "connect-src 'self'" in dashboard_csp
     assert "unsafe-inline" not in dashboard_csp.split("script-src")[1], dashboard_csp
+    docs_csp = page.legopt_documents["/api/v1/docs"]["content-security-policy"]  # Swagger UI
+    assert "default-src 'self'" in docs_csp and "connect-src 'self'" in docs_csp, docs_csp
 
     # ...and the browser enforces them: on the viewer's page, a call and an image from elsewhere
     # are refused (192.0.2.1 is TEST-NET-1: not reached even if the policy were missing)

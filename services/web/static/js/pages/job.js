@@ -73,9 +73,9 @@ export async function render(main, jobId) {
       h("h1", job.name || `Job ${shortId(job.id)}`), badge(job.status),
       job.sweep_id ? h("a", { href: `#/sweep/${job.sweep_id}` }, `sweep ${shortId(job.sweep_id)}`) : null,
       h("span.spacer"),
-      !TERMINAL.has(job.status) ? h("button.danger", { on: { click: async () => {
+      !TERMINAL.has(job.status) ? h("button.danger", { dataset: { action: "cancel" }, on: { click: async () => {
         await api(`/jobs/${job.id}/cancel`, { method: "POST" }); refresh(); } } }, "Cancel") : null,
-      h("button.secondary", { on: { click: async () => { location.hash = `#/job/${(await rerun(job.id)).id}`; } } }, "Re-run (new seed)"),
+      h("button.secondary", { dataset: { action: "rerun" }, on: { click: async () => { location.hash = `#/job/${(await rerun(job.id)).id}`; } } }, "Re-run (new seed)"),
       h("button.secondary", { dataset: { export: "spec" }, on: { click: () => download(`/jobs/${job.id}/spec.yaml`, "spec.yaml") } }, "Spec YAML"),
       job.status === "succeeded" ? h("button.secondary", { on: { click: () => download(`/jobs/${job.id}/recording`, "job.rrd") } }, "Recording .rrd") : null));
   }
