@@ -92,9 +92,10 @@ def test_path_placement_on_real_arms(name: str, preset: SpecOf) -> None:
                                         "solo12_leg.FL has 3"),
         ("solo12_leg", "path_placement", "path_placement needs ≥ 6 actuated joints; robot "
                                          "solo12_leg.FL has 3"),
-        ("solo12", "path_tracking", "needs a serial"),
-        ("anymal", "path_placement", "needs a serial"),
-        ("go1", "path_tracking", "needs a serial"),
+        # every whole legged robot × every arm kind
+        *[(robot, kind, "needs a serial")
+          for robot in ("solo12", "anymal", "go1")
+          for kind in ("path_tracking", "path_placement")],
     ],
 )
 def test_arm_kinds_refuse_what_is_not_an_arm(name: str, kind: str, why: str,
