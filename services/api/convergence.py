@@ -14,15 +14,12 @@ whole front's; for rows written before it did, it is that of the thinned front.
 Values are shown as stored: every objective is minimised (an objective ``neg_<m>`` is the
 negation of a maximised quantity and is labelled so), so the best is always the least.
 
-A page after generation ``a`` continues from the running minimum at ``a``: kept in a small
-in-process cache for the page that returned ``a`` (a polling page asks for exactly that), read
-back from the stored fronts otherwise (``output_queries.best_front_minimum``).
+A page after generation ``a`` continues from the running minimum at ``a``, read back from the
+stored fronts (``output_queries.best_front_minimum``: their packed bytes, no Python lists).
 """
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -34,12 +31,6 @@ from services.store import output_queries as oq
 from services.store.records import GenerationRecord
 
 __all__ = ["ConvergenceRow", "convergence"]
-
-#: Running minima kept per process, by (job id, generation).
-CACHE_SIZE = 512
-
-_cache: OrderedDict[tuple[str, int], np.ndarray | None] = OrderedDict()
-_lock = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -63,26 +54,6 @@ def _json(a: np.ndarray | None) -> list[float | None] | None:
     return [float(v) if np.isfinite(v) else None for v in a]
 
 
-def _remember(job_id: str, generation: int, value: np.ndarray | None) -> None:
-    with _lock:
-        _cache[(job_id, generation)] = value
-        _cache.move_to_end((job_id, generation))
-        while len(_cache) > CACHE_SIZE:
-            _cache.popitem(last=False)
-
-
-def _start(session: Session, job_id: str, after: int | None) -> np.ndarray | None:
-    """The running minimum at generation ``after`` (None before any front)."""
-    if after is None or after < 0:
-        return None
-    with _lock:
-        if (job_id, after) in _cache:
-            return _cache[(job_id, after)]
-    value = oq.best_front_minimum(session, job_id, upto=after)
-    _remember(job_id, after, value)
-    return value
-
-
 def convergence(
     session: Session, job_id: str, rows: Sequence[GenerationRecord], *, after: int | None
 ) -> list[ConvergenceRow]:
@@ -93,15 +64,10 @@ def convergence(
     several = max(len(_values(g.best)) for g in rows) > 1 or any(g.front for g in rows)
     if not several:  # one objective: the stored best is the incumbent, the best so far
         return [ConvergenceRow(None, _json(np.asarray(_values(g.best)))) for g in rows]
-    running = _start(session, job_id, after)
+    running = None if after is None else oq.best_front_minimum(session, job_id, upto=after)
     out = []
     for g in rows:
         low = oq.front_minimum(g.front)
-        if low is not None:
-            if running is not None and running.shape == low.shape:
-                running = np.fmin(running, low)
-            else:
-                running = low
+        running = oq.fold_minimum(running, low)
         out.append(ConvergenceRow(_json(low), _json(running)))
-    _remember(job_id, rows[-1].generation, running)
     return out

@@ -95,26 +95,6 @@ def _has_nul(value: Any) -> bool:
     return type(value) is str and "\x00" in value
 
 
-def _nul_errors(doc: Any) -> list[dict[str, Any]]:
-    """An error at every string value or object key of ``doc`` holding a NUL (in order)."""
-    errors: list[dict[str, Any]] = []
-    if _has_nul(doc):
-        return [_error((), _NUL_MESSAGE, "nul_character")]
-    stack: list[tuple[Any, Loc]] = [(doc, ())] if isinstance(doc, dict | list) else []
-    while stack and len(errors) < MAX_ERRORS:
-        node, loc = stack.pop()
-        nested: list[tuple[Any, Loc]] = []
-        for key, value in _children(node):
-            if _has_nul(key):
-                errors.append(_error((*loc, key), _NUL_MESSAGE, "nul_character"))
-            if isinstance(value, dict | list):
-                nested.append((value, (*loc, key)))
-            elif _has_nul(value):
-                errors.append(_error((*loc, key), _NUL_MESSAGE, "nul_character"))
-        stack.extend(reversed(nested))
-    return errors[:MAX_ERRORS]
-
-
 def _needs_report(doc: Any, max_depth: int) -> bool:
     """Fast pass (no locations): does ``doc`` nest too deep or hold a non-finite number?"""
     if _is_non_finite(doc):
@@ -134,10 +114,13 @@ def _needs_report(doc: Any, max_depth: int) -> bool:
     return False
 
 
-def _locate(doc: Any, max_depth: int) -> list[dict[str, Any]]:
-    """Errors (at most ``MAX_ERRORS``) of a document ``_needs_report`` flagged, in order."""
+def _locate(doc: Any, max_depth: int, nul: bool = False) -> list[dict[str, Any]]:
+    """Errors (at most ``MAX_ERRORS``) of a document ``_needs_report`` flagged, in order;
+    with ``nul`` also every string value or object key holding a NUL."""
     if _is_non_finite(doc):
         return [_error((), _NON_FINITE_MESSAGE, "finite_number")]
+    if nul and _has_nul(doc):
+        return [_error((), _NUL_MESSAGE, "nul_character")]
     errors: list[dict[str, Any]] = []
     stack: list[tuple[Any, Loc]] = [(doc, ())]
     while stack and len(errors) < MAX_ERRORS:
@@ -147,10 +130,14 @@ def _locate(doc: Any, max_depth: int) -> list[dict[str, Any]]:
             break
         nested: list[tuple[Any, Loc]] = []
         for key, value in _children(node):
+            if nul and _has_nul(key):
+                errors.append(_error((*loc, key), _NUL_MESSAGE, "nul_character"))
             if isinstance(value, dict | list):
                 nested.append((value, (*loc, key)))
             elif _is_non_finite(value):
                 errors.append(_error((*loc, key), _NON_FINITE_MESSAGE, "finite_number"))
+            elif nul and _has_nul(value):
+                errors.append(_error((*loc, key), _NUL_MESSAGE, "nul_character"))
         stack.extend(reversed(nested))  # depth first, in document order
     return errors[:MAX_ERRORS]
 
@@ -169,10 +156,10 @@ def check_json_body(body: bytes, max_depth: int = MAX_JSON_DEPTH) -> list[dict[s
         return [_error((exc.start,), msg, "json_invalid")]
     except ValueError as exc:  # an integer literal over sys.get_int_max_str_digits()
         return [_error((), f"JSON number out of range: {exc}", "json_invalid")]
-    errors = _locate(doc, max_depth) if _needs_report(doc, max_depth) else []
-    if not errors and b"\\u0000" in body:  # JSON escapes every NUL in a string this way
-        errors = _nul_errors(doc)
-    return errors
+    nul = b"\\u0000" in body  # JSON escapes every NUL in a string this way: a cheap test
+    if not nul and not _needs_report(doc, max_depth):
+        return []
+    return _locate(doc, max_depth, nul)
 
 
 class JsonGuardMiddleware:

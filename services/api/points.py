@@ -41,6 +41,7 @@ from services.api.deps import ApiContext
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.records import ArtifactRecord, JobRecord
+from services.store.tables import JobStatus
 
 T = TypeVar("T")
 
@@ -280,6 +281,24 @@ def front_metrics(ctx: ApiContext, job: JobRecord) -> dict[int, dict[str, Any] |
     return _run((job.id, FRONT_METRICS), make)
 
 
+def point_metrics(
+    ctx: ApiContext, job: JobRecord, any_points: bool
+) -> tuple[dict[int, dict[str, Any] | None], str, str | None]:
+    """``(metrics by point index, state, note)`` of a job's front (``FrontOut.point_metrics``):
+    computed once and cached (:func:`front_metrics`); pending when that takes
+    longer than a request waits, unavailable when the spec cannot be decoded again."""
+    if not any_points or job.status is not JobStatus.SUCCEEDED:
+        return {}, "ready", None
+    try:
+        return front_metrics(ctx, job), "ready", None
+    except HTTPException as exc:
+        if exc.status_code == status.HTTP_503_SERVICE_UNAVAILABLE:
+            return {}, "pending", "the points' metrics are being computed: ask again shortly"
+        if exc.status_code == status.HTTP_409_CONFLICT:
+            return {}, "unavailable", str(exc.detail)
+        raise
+
+
 def point_motion(
     ctx: ApiContext, job: JobRecord, *, point: int | None, baseline: str | None
 ) -> dict[str, Any]:
@@ -349,6 +368,7 @@ __all__ = [
     "baseline_recording",
     "front_metrics",
     "point_kind",
+    "point_metrics",
     "point_motion",
     "point_recording",
 ]

@@ -102,6 +102,16 @@ def front_minimum(front: Any) -> np.ndarray | None:
     return np.where(np.isfinite(low), low, np.nan)
 
 
+def fold_minimum(best: np.ndarray | None, low: np.ndarray | None) -> np.ndarray | None:
+    """The running per-objective minimum ``best`` updated with a front's minimum ``low``
+    (NaN-ignoring; a front of another width starts it again)."""
+    if low is None:
+        return best
+    if best is None or best.shape != low.shape:
+        return low
+    return np.fmin(best, low)
+
+
 def best_front_minimum(session: Session, job_id: str, *, upto: int) -> np.ndarray | None:
     """Per-objective minimum over the stored fronts of generations ``<= upto`` (NaN for an
     objective without a finite value), or None when none of them has a front — what the
@@ -114,10 +124,9 @@ def best_front_minimum(session: Session, job_id: str, *, upto: int) -> np.ndarra
     )
     best: np.ndarray | None = None
     for packed, legacy in session.execute(stmt):
-        low = front_minimum(decode_front_array(packed) if packed is not None else legacy)
-        if low is None:
-            continue
-        best = low if best is None or best.shape != low.shape else np.fmin(best, low)
+        best = fold_minimum(
+            best, front_minimum(decode_front_array(packed) if packed is not None else legacy)
+        )
     return best
 
 
@@ -155,6 +164,7 @@ __all__ = [
     "add_artifact",
     "best_front_minimum",
     "final_hypervolumes",
+    "fold_minimum",
     "front_minimum",
     "fronts_of",
     "get_hypervolume_ref",

@@ -12,8 +12,8 @@ from fastapi.responses import StreamingResponse
 from services.api.convergence import ConvergenceRow, convergence
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.export_formats import MEDIA_TYPES, ExportFormat, encode, filename
+from services.api.points import point_metrics
 from services.api.routes.dashboard import Filters, sync_labels
-from services.api.routes.job_views import point_metrics
 from services.api.routes.jobs import owned_job
 from services.api.routes.sweep_views import cell_table
 from services.api.schemas import ErrorOut, objective_names

@@ -25,7 +25,7 @@ from services.api.dashboard_schemas import (
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.points import (
     baseline_recording,
-    front_metrics,
+    point_metrics,
     point_motion,
     point_recording,
 )
@@ -167,24 +167,6 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
         hypervolume_ref=ref,
         paper=paper_numbers(spec, objective_quantities, kind),
     )
-
-
-def point_metrics(
-    ctx: ApiContext, job: JobRecord, any_points: bool
-) -> tuple[dict[int, dict[str, Any] | None], str, str | None]:
-    """``(metrics by point index, state, note)`` of a job's front (``FrontOut.point_metrics``):
-    computed once and cached (``services.api.points.front_metrics``); pending when that takes
-    longer than a request waits, unavailable when the spec cannot be decoded again."""
-    if not any_points or job.status is not JobStatus.SUCCEEDED:
-        return {}, "ready", None
-    try:
-        return front_metrics(ctx, job), "ready", None
-    except HTTPException as exc:
-        if exc.status_code == status.HTTP_503_SERVICE_UNAVAILABLE:
-            return {}, "pending", "the points' metrics are being computed: ask again shortly"
-        if exc.status_code == status.HTTP_409_CONFLICT:
-            return {}, "unavailable", str(exc.detail)
-        raise
 
 
 def paper_numbers(spec: Any, objectives: list[Quantity], kind: str | None) -> PaperOut | None:
