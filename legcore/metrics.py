@@ -224,7 +224,8 @@ def knee_point(F: ArrayLike) -> int:
     point with the largest signed distance from the hyperplane through them, on the ideal side
     (for two objectives: the line through the two end points of the front). When the extremes do
     not span a hyperplane (fewer than ``m`` distinct extremes, or a plane through the ideal), the
-    knee falls back to the point closest to the ideal point in the normalised space.
+    knee falls back to the point closest to the ideal point in the normalised space. Distances
+    within 1e-12 of each other are a tie, won by the first point.
 
     Dominated points in ``F`` are allowed but the result is only meaningful for a front.
     """

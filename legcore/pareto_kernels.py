@@ -145,6 +145,11 @@ def constrained_ranks_kernel(
     return r + 1
 
 
+#: Distances (normalised objective space, O(1)) closer than this are a tie: the first point
+#: wins, so rounding (the order of a sum, a fused multiply-add) cannot pick another knee.
+_KNEE_TIE = 1e-12
+
+
 @numba.njit(cache=True, nogil=True)
 def knee_kernel(F: NDArray[np.float64]) -> int:  # pragma: no cover
     """Index of the knee of ``F`` (n >= 1, m): see :func:`legcore.metrics.knee_point`."""
@@ -227,7 +232,7 @@ def knee_kernel(F: NDArray[np.float64]) -> int:  # pragma: no cover
         for k in range(m):
             dot += Z[i, k] * normal[k]
         dist = (1.0 - dot) / norm  # > 0 on the ideal side
-        if dist > best_dist:
+        if dist > best_dist + _KNEE_TIE:  # a tie within rounding keeps the first point
             best_dist = dist
             best = i
     return best

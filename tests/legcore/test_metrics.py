@@ -224,7 +224,8 @@ def _knee_reference(F: np.ndarray) -> int:
     norm = float(np.linalg.norm(normal))
     if not np.isfinite(norm) or norm == 0.0 or np.any(normal <= 0):
         return fallback
-    return int(np.argmax((1.0 - Z @ normal) / norm))
+    dist = (1.0 - Z @ normal) / norm
+    return int(np.flatnonzero(dist > dist.max() - 1e-12)[0])  # ties within rounding: first
 
 
 @pytest.mark.parametrize("m", [2, 3, 4])
