@@ -30,8 +30,8 @@ from pymoo.core.problem import Problem as PymooProblem
 from legcore.metrics import hypervolume
 from legcore.optimizers import MaxGenerations, get_algorithm, minimize
 from legcore.optimizers.moead import lattice_divisions
-from legcore.problems.hexapod_workspace import HV_REF, Params, build
 from legcore.robots import catalog
+from legcore.studies.hexapod_workspace.problem import HV_REF, Params, build
 
 REF = np.asarray(HV_REF)
 

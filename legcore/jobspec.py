@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
 from legcore.optimizers import get_algorithm
-from legcore.problems.registry import studies
-from legcore.problems.study import StudyParams
 from legcore.robots.spec import RobotSpec
+from legcore.studies.registry import studies
+from legcore.studies.study import StudyParams
 
 __all__ = [
     "Budget",

@@ -16,7 +16,8 @@ call stays within an evaluation budget (:func:`eval_budget_bytes`: 256 MiB, or
 
 :func:`predicted_peak_bytes` is the peak resident memory of a process running a job: the
 imported libraries and built problem (:data:`PROCESS_BASE_BYTES`), the largest chunked
-evaluation (the job's own, or the seed 000 baseline GAs'), and the population state. The
+evaluation (the job's own, or its companions': the seed 000 baseline GAs), and the population
+state. The
 service refuses a job whose prediction exceeds its per-worker limit
 (``Settings.worker_memory_limit_mb``); ``benchmarks/bench_memory.py`` compares the prediction
 with the measured peak RSS.
@@ -161,14 +162,10 @@ def eval_peak_bytes(problem: Any, rows: int, budget: int | None = None) -> int:
 
 
 def _companions(problem: Any) -> list[tuple[Any, int]]:
-    """Other problems a job evaluates, with their population: the seed 000 baseline GAs a
-    swing_energy job runs in ``finalize`` (each with its own criterion)."""
-    if _kind(problem) != "swing_energy":
-        return []
-    from legcore.problems.swing_energy_baselines import ga_baseline_problems
-
-    pop = int(getattr(problem.params, "baseline_pop_size", 0) or 0)
-    return [(sub, pop) for sub in ga_baseline_problems(problem)]
+    """Other problems a job evaluates, with their population (a study problem's
+    ``companions()``: e.g. the baseline GAs a swing_energy job runs in ``finalize``)."""
+    companions = getattr(problem, "companions", None)
+    return list(companions()) if callable(companions) else []
 
 
 def predicted_peak_bytes(problem: Any, population: int, budget: int | None = None) -> int:

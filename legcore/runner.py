@@ -7,6 +7,7 @@ call. Both produce the same :class:`RunResult` for the same spec and seed.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,9 +19,9 @@ from legcore.optimizers import Progress, Result, Run, get_algorithm, termination
 from legcore.optimizers.base import Algorithm
 from legcore.optimizers.termination import Termination
 from legcore.problems.base import constraint_violation
-from legcore.problems.registry import get_study
-from legcore.problems.study import Solution, Study, StudyProblem
 from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog
+from legcore.studies.registry import get_study
+from legcore.studies.study import Solution, Study, StudyProblem, Task
 
 __all__ = [
     "JobSize",
@@ -149,14 +150,24 @@ class RunResult:
     optimizer: dict[str, Any]
     objective_names: tuple[str, ...]
     start: dict[str, Any] | None = None
+    task: Task | None = None
+
+    @property
+    def feasible(self) -> bool:
+        """True when the optimum violates no constraint (``best.violations`` is empty)."""
+        return not self.best.violations
 
     def to_dict(self) -> dict[str, Any]:
-        """``result.json``: spec, status, best, pareto, baselines, history, extras, optimizer,
-        start (what the optimiser earned: `legcore.earned`)."""
+        """``result.json``: spec, status, feasible and the optimum's violations, the task (the
+        robot-relative parameters and their rules), best, pareto, baselines, history, extras,
+        optimizer, start (what the optimiser earned: `legcore.earned`)."""
         return _jsonable(
             {
                 "spec": self.spec.model_dump(mode="json"),
                 "status": self.status,
+                "feasible": self.feasible,
+                "violations": [v.as_dict() for v in self.best.violations or ()],
+                "task": None if self.task is None else self.task.as_dict(),
                 "objective_names": list(self.objective_names),
                 "best": self.best.summary(),
                 "pareto": self.pareto,
@@ -178,7 +189,7 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         from legcore.optimizers.refine import refine_result
 
         result, refined = refine_result(problem, result, prepared.spec.optimizer.refine_max_iter)
-    best = problem.solution(np.asarray(result.x))
+    best = checked(problem, problem.solution(np.asarray(result.x)))
     pareto = [
         {"x": [float(v) for v in x], "objectives": [float(v) for v in f]}
         for x, f in zip(result.front_X, result.front_F, strict=True)
@@ -188,7 +199,7 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         status="succeeded",
         best=best,
         pareto=pareto,
-        baselines=problem.baseline_solutions(),
+        baselines={k: checked(problem, v) for k, v in problem.baseline_solutions().items()},
         history=[r.to_dict() for r in result.history],
         extras=problem.extras(np.asarray(result.front_X), np.asarray(result.front_F)),
         optimizer={
@@ -203,7 +214,16 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         },
         objective_names=problem.objective_names,
         start=start_summary(problem, result),
+        task=problem.task,
     )
+
+
+def checked(problem: StudyProblem, sol: Solution) -> Solution:
+    """``sol`` with its violated constraints (``problem.violations`` of its ``x``; a solution
+    without a decision vector is left unchecked)."""
+    if sol.x is None or sol.violations is not None:
+        return sol
+    return dataclasses.replace(sol, violations=problem.violations(np.asarray(sol.x, dtype=float)))
 
 
 def start_summary(problem: StudyProblem, result: Result) -> dict[str, Any]:

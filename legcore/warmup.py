@@ -76,8 +76,8 @@ def warm_up(
 
     A kind whose job fails is reported (``nan``) and skipped: warming up is best effort.
     """
-    from legcore.problems.registry import STUDY_MODULES, studies
     from legcore.runner import run
+    from legcore.studies.registry import STUDY_MODULES, studies
 
     found = studies()
     chosen = kinds if kinds is not None else [k for k in found if k in STUDY_MODULES]

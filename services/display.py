@@ -3,7 +3,7 @@
 Both views read a :class:`ResultView` — a finished job's objectives, metrics, baselines and
 per-joint table, from the API's result document (:meth:`ResultView.from_api`) or from an
 in-process ``RunResult.to_dict()`` (:meth:`ResultView.from_run`). Names and units come from
-`legcore.problems.metric_names`; the papers' own numbers from
+`legcore.studies.metric_names`; the papers' own numbers from
 ``examples/papers/paper_numbers.yaml``.
 
 Conventions: numbers have 4 significant digits; a quantity the user maximises is shown
@@ -23,7 +23,7 @@ from rich.console import Group, RenderableType
 from rich.table import Table
 from rich.text import Text
 
-from legcore.problems.metric_names import (
+from legcore.studies.metric_names import (
     STUDY_DISPLAY,
     MetricName,
     baseline_name,

@@ -34,8 +34,8 @@ class PaperRow:
 
     def symbol(self, kind: str | None) -> str:
         """The paper's name for the quantity: the row's own, else the metric's (its
-        ``legcore.problems.metric_names`` entry for the study ``kind``); '' when it has none."""
-        from legcore.problems.metric_names import metric_name
+        ``legcore.studies.metric_names`` entry for the study ``kind``); '' when it has none."""
+        from legcore.studies.metric_names import metric_name
 
         return self.paper or metric_name(self.metric, kind).paper
 

@@ -8,9 +8,9 @@ import numpy as np
 
 from legcore.dynamics import inverse_dynamics
 from legcore.kinematics import fk
-from legcore.problems.study import Motion, Solution
 from legcore.recording.helpers import _cumtrapz
 from legcore.robots import catalog
+from legcore.studies.study import Motion, Solution
 
 
 def arm_motion(K: int = 5000, T: float = 3.0, **scene: object) -> Motion:

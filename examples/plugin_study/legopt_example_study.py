@@ -8,12 +8,12 @@ what is missing).
 
 What a study kind provides (all from ``legcore``'s public API):
 
-- ``Params``: a :class:`~legcore.problems.study.StudyParams` subclass whose ``kind`` is a
+- ``Params``: a :class:`~legcore.studies.study.StudyParams` subclass whose ``kind`` is a
   ``Literal`` of the kind's name — the API validates a job's ``problem`` by it;
-- a :class:`~legcore.problems.study.StudyProblem`: bounds, a vectorised ``_evaluate(X)`` over
+- a :class:`~legcore.studies.study.StudyProblem`: bounds, a vectorised ``_evaluate(X)`` over
   the whole population, ``solution(x)`` decoding a decision vector (metrics + a
-  :class:`~legcore.problems.study.Motion` for the recording);
-- ``STUDY``: the :class:`~legcore.problems.study.Study` descriptor the entry point names.
+  :class:`~legcore.studies.study.Motion` for the recording);
+- ``STUDY``: the :class:`~legcore.studies.study.Study` descriptor the entry point names.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from pydantic import Field
 
 from legcore.dynamics import inverse_dynamics
 from legcore.kinematics import fk
-from legcore.problems.study import Motion, Solution, Study, StudyParams, StudyProblem
 from legcore.robots.capabilities import Needs
+from legcore.studies.study import Motion, Solution, Study, StudyParams, StudyProblem
 
 __all__ = ["STUDY", "HoldingTorqueProblem", "Params"]
 

@@ -1,7 +1,7 @@
 """A run → the plain time series its Rerun recording shows (pure: numpy only, no Rerun here).
 
 :func:`record_run` turns a :class:`~legcore.runner.RunResult` (and :func:`record_motion` a single
-:class:`~legcore.problems.study.Motion`) into a :class:`RunRecording`: a flat list of items, each
+:class:`~legcore.studies.study.Motion`) into a :class:`RunRecording`: a flat list of items, each
 with its entity path, its timeline and its numbers. ``services.worker.rerun_writer`` — the only
 module that imports Rerun — logs them one archetype per item; nothing here knows about Rerun.
 

@@ -44,9 +44,9 @@ from legcore.recording.sampling import minmax_columns, shared_minmax_indices, st
 from legcore.recording.urdf_visuals import _urdf_visuals
 
 if TYPE_CHECKING:
-    from legcore.problems.study import Motion
     from legcore.robots.legged import LeggedRobot
     from legcore.robots.model import Robot
+    from legcore.studies.study import Motion
 
 # ---------------------------------------------------------------------------------------------
 # one motion
@@ -303,7 +303,7 @@ def _scene_items(
     array → points over time; keys with "path" → a static strip; other (M,3)/(3,) arrays and
     ``feet``/``targets`` dicts of 3-vectors → static points. Body-pose keys, metadata and
     direction-like keys are not drawn."""
-    from legcore.problems.study import Box
+    from legcore.studies.study import Box
 
     K = motion.n_samples
     t = np.asarray(motion.t, dtype=float)[idx]

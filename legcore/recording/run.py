@@ -34,10 +34,10 @@ from legcore.recording.size import (
 )
 
 if TYPE_CHECKING:
-    from legcore.problems.study import Solution
     from legcore.robots.legged import LeggedRobot
     from legcore.robots.model import Robot
     from legcore.runner import RunResult
+    from legcore.studies.study import Solution
 
 # ---------------------------------------------------------------------------------------------
 # one run
@@ -386,8 +386,8 @@ def _resolve_robot(result: RunResult, notes: list[str]) -> Robot | LeggedRobot |
     spec = getattr(result, "spec", None)
     if spec is not None:
         try:
-            from legcore.problems.registry import get_study
             from legcore.runner import resolve_robot
+            from legcore.studies.registry import get_study
 
             return resolve_robot(spec, get_study(spec.problem.kind))
         except Exception as exc:  # noqa: BLE001 - drawing falls back to the motion's robot name

@@ -34,9 +34,9 @@ from typing import Any
 
 from legcore import runner
 from legcore.jobspec import JobSpec
-from legcore.problems.registry import get_study
 from legcore.robots import LeggedRobot, Robot, build_any_robot
 from legcore.runner import JobSize, Prepared
+from legcore.studies.registry import get_study
 from services.api.errors import invalid
 from services.lru import BuiltCache
 

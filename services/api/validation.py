@@ -19,9 +19,9 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 
 from legcore.jobspec import JobSpec, parse_job_spec, spec_error_locations
-from legcore.problems.registry import plugin_errors
 from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog, parse_robot_spec
 from legcore.runner import JobSize, job_size
+from legcore.studies.registry import plugin_errors
 from services.api.errors import (
     Loc,
     clean_pydantic_errors,
@@ -379,7 +379,7 @@ def _prepare_error(exc: ValueError, prefix: Loc) -> Exception:
 
 def example_specs() -> dict[str, dict[str, Any]]:
     """One minimal job spec per available study kind (each study's defaults)."""
-    from legcore.problems.registry import studies
+    from legcore.studies.registry import studies
 
     return {kind: {"problem": {"kind": kind}} for kind in sorted(studies())}
 

@@ -50,7 +50,7 @@ def label_values(base: Any, overrides: Mapping[str, Any] | None) -> dict[str, An
     """The labels of a job whose spec is ``base`` with ``overrides`` applied: ``kind``,
     ``robot`` (catalog or robot name; the study's default robot when none), ``optimizer``
     (the study's default when none), ``name``, ``seed`` and ``tags`` (comma-joined)."""
-    from legcore.problems.registry import studies
+    from legcore.studies.registry import studies
     from services.store.specs import spec_value
 
     kind = str(spec_value(base, overrides, "problem.kind") or "")

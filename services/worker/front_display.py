@@ -97,9 +97,9 @@ def front_display(
 ) -> FrontDisplay | None:
     """The display of fronts ``(k, d)`` (d = 2 or 3) with objective ``names`` of the study
     ``kind``: the box of every finite point, grown by 5 % (a flat axis gets a span of 1), and
-    the axis labels ``readable name [unit]`` (:mod:`legcore.problems.metric_names`), or the
+    the axis labels ``readable name [unit]`` (:mod:`legcore.studies.metric_names`), or the
     given ``labels``."""
-    from legcore.problems.metric_names import metric_name
+    from legcore.studies.metric_names import metric_name
 
     pts = [np.asarray(F, dtype=float) for F in fronts if np.asarray(F).size]
     if not pts:

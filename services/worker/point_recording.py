@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from legcore.problems.study import Motion, Solution
 from legcore.recording import SIGNALS, stride_indices
 from legcore.runner import Prepared, RunResult, prepare
+from legcore.studies.study import Motion, Solution
 from services.lru import BuiltCache
 
 __all__ = [

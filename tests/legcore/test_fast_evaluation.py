@@ -25,15 +25,15 @@ from legcore.chain_points import chain_points
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import mechanical_energy
 from legcore.kinematics import fk, frames
-from legcore.problems.path_tracking_kin import compose_ppoly, peak_abs
-from legcore.problems.swing_energy import Params, SwingEnergyProblem, build
-from legcore.problems.swing_energy_geometry import (
+from legcore.robots import LeggedRobot, Robot, build_robot, catalog
+from legcore.runner import prepare
+from legcore.studies.path_tracking.kin import compose_ppoly, peak_abs
+from legcore.studies.swing_energy.geometry import (
     chain_clearance,
     segment_box_depth,
     travel_and_peak,
 )
-from legcore.robots import LeggedRobot, Robot, build_robot, catalog
-from legcore.runner import prepare
+from legcore.studies.swing_energy.problem import Params, SwingEnergyProblem, build
 from legcore.trajectories.sampling import compose_time_law
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

@@ -27,8 +27,8 @@ from legcore.memory import (
 )
 from legcore.problems.base import Problem
 from legcore.problems.benchmarks import ZDT1
-from legcore.problems.swing_energy_baselines import ga_baseline_problems
 from legcore.runner import prepare
+from legcore.studies.swing_energy.baselines import ga_baseline_problems
 
 SWING: dict[str, Any] = {"problem": {"kind": "swing_energy"}}
 OBSTACLE: dict[str, Any] = {"problem": {"kind": "swing_energy", "obstacle": True}}

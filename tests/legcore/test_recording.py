@@ -10,9 +10,9 @@ import yaml
 
 from legcore import recording as R
 from legcore.kinematics import fk, frames
-from legcore.problems.study import Box, Motion
 from legcore.recording.helpers import _chain_scale
 from legcore.robots import catalog
+from legcore.studies.study import Box, Motion
 from tests.recording_fixtures import arm_motion, fake_result
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.yaml"))

@@ -9,8 +9,8 @@ from pydantic import ValidationError
 
 import legcore
 from legcore.jobspec import parse_job_spec
-from legcore.problems.registry import studies
 from legcore.runner import job_size, prepare
+from legcore.studies.registry import studies
 
 QUICK = {"problem": {"kind": "quadruped_gait"}, "budget": {"generations": 3}, "record": False}
 

@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-import legcore.problems.swing_energy_baselines as sb
-from legcore.problems.registry import STUDY_MODULES, studies
+import legcore.studies.swing_energy.baselines as sb
 from legcore.result_cache import cache_dir, cached, code_version, content_key
 from legcore.runner import prepare
+from legcore.studies.registry import STUDY_MODULES, studies
 from legcore.warmup import warmup_spec
 from services.store.settings import Settings
 

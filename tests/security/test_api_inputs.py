@@ -23,9 +23,9 @@ from fastapi.testclient import TestClient
 from httpx import Response
 
 import legcore.robots.build as robot_build
-from legcore.problems.registry import studies
 from legcore.robots import catalog
 from legcore.runner import job_size, prepare
+from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.api.body_limit import DEFAULT_MAX_BODY_BYTES
 from services.api.deps import ApiContext

@@ -139,8 +139,8 @@ def _not_read_warnings(warnings: list[str], names: dict[str, str]) -> list[str]:
 def test_recording_embeds_no_named_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The worker's writer (no mesh roots) reads none of the named files; each is a note."""
     from legcore.kinematics import fk
-    from legcore.problems.study import Motion
     from legcore.robots import build_robot
+    from legcore.studies.study import Motion
     from services.worker import rerun_blueprint as B
     from services.worker import rerun_writer as W
     from tests.recording_fixtures import fake_result
@@ -165,8 +165,8 @@ def test_a_mesh_inside_the_mesh_roots_is_recorded(tmp_path: Path) -> None:
     """With an explicit root (what a CLI run may pass for its spec's folder), a package:// mesh
     inside it is embedded — and every attack form is still refused."""
     from legcore.kinematics import fk
-    from legcore.problems.study import Motion
     from legcore.robots import build_robot
+    from legcore.studies.study import Motion
     from services.worker import rerun_blueprint as B
     from services.worker import rerun_writer as W
     from tests.recording_fixtures import fake_result

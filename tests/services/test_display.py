@@ -1,4 +1,4 @@
-"""What the CLI prints about a result (services/display.py, legcore/problems/metric_names.py,
+"""What the CLI prints about a result (services/display.py, legcore/studies/metric_names.py,
 examples/papers/paper_numbers.yaml): 4 significant digits, maximised quantities positive, no
 repeated metric, readable names, the paper's numbers beside ours."""
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import yaml
 from rich.console import Console
 
-from legcore.problems.metric_names import (
+from legcore.studies.metric_names import (
     METRICS,
     display_objective,
     joint_row_name,

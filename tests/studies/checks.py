@@ -38,8 +38,8 @@ import numpy as np
 import pinocchio as pin
 
 from legcore.kinematics import fk
-from legcore.problems.study import Solution
 from legcore.robots import LeggedRobot, Robot
+from legcore.studies.study import Solution
 from tests.studies.physics import tool_positions
 
 #: Position tolerance of the physical checks (issue 9: "to 1e-6 m").

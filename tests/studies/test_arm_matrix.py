@@ -27,9 +27,9 @@ import numpy as np
 import pytest
 
 import legcore
-from legcore.problems.path_placement import PathPlacementProblem
-from legcore.problems.path_tracking import PathTrackingProblem
 from legcore.runner import prepare
+from legcore.studies.path_placement.problem import PathPlacementProblem
+from legcore.studies.path_tracking.problem import PathTrackingProblem
 from services.client import ApiError
 from tests.robot_files import ERD_URDF, erd_robots_dir
 from tests.studies.checks import (

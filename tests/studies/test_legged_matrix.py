@@ -10,7 +10,7 @@ physical checks, or the refusal naming the missing capability.
   ground reactions are vertical on feet that move horizontally: they do no work).
 - ``hexapod_workspace``: no robot here has six legs — each is refused by name; a URDF hexapod
   runs here with the feet-fixed check, the parametric one in
-  tests/legcore/problems/test_hexapod_workspace.py.
+  tests/legcore/studies/test_hexapod_workspace.py.
 
 The checks live in :mod:`tests.studies.checks`; tests/studies/test_service_studies.py applies
 them to the same kinds run through the real service.
@@ -115,7 +115,7 @@ def test_hexapod_workspace_refuses_what_is_not_a_hexapod(
 def test_hexapod_workspace_on_a_urdf_hexapod() -> None:
     """A parametric hexapod written as URDF (numerical FK/IK): the optimum's and the baselines'
     motions keep the stance feet where they started (Pinocchio FK, 1e-6 m)."""
-    from legcore.problems.hexapod_workspace_robot import HexapodGeometry, hexapod_urdf
+    from legcore.studies.hexapod_workspace.robot import HexapodGeometry, hexapod_urdf
 
     spec = {"robot": {"kind": "urdf", "name": "hexapod", "legs": "auto",
                       "urdf": hexapod_urdf(HexapodGeometry(link_lengths=(0.03, 0.08, 0.12)))},

@@ -254,7 +254,7 @@ def test_quadruped_gait_on_a_stored_go1(stack: Stack) -> None:
 
 
 def test_hexapod_workspace_on_a_urdf_hexapod(stack: Stack) -> None:
-    from legcore.problems.hexapod_workspace_robot import HexapodGeometry, hexapod_urdf
+    from legcore.studies.hexapod_workspace.robot import HexapodGeometry, hexapod_urdf
 
     g = HexapodGeometry(link_lengths=(0.03, 0.08, 0.12))
     spec: dict[str, Any] = {
@@ -299,7 +299,7 @@ def test_a_plugin_that_fails_to_import_is_reported(stack: Stack) -> None:
     (a fresh process, as a worker starts), ``GET /studies`` reports it (the listing test) and
     ``legopt studies`` prints it; the kind is not offered, and the service runs the others."""
     out = subprocess.run(
-        [sys.executable, "-c", "import json; from legcore.problems.registry import "
+        [sys.executable, "-c", "import json; from legcore.studies.registry import "
          "plugin_errors, studies; print(json.dumps([plugin_errors(), sorted(studies())]))"],
         env=stack.env, cwd=ROOT, capture_output=True, text=True, timeout=120,
     )  # fmt: skip

@@ -131,7 +131,7 @@ def dashboard_jobs(
 )
 def dashboard_options(key: CurrentKey) -> DashboardOptions:
     """Study kinds (with their titles), optimizers, statuses and sort columns."""
-    from legcore.problems.registry import studies
+    from legcore.studies.registry import studies
 
     return DashboardOptions(
         kinds=[Choice(value=k, label=s.title) for k, s in sorted(studies().items())],
@@ -172,7 +172,7 @@ def _joints(robot: Robot, leg: str | None = None) -> list[JointOut]:
 def study_fits(cache_key: str, robot: Robot | LeggedRobot) -> list[StudyFit]:
     """Each study kind, and whether it accepts ``robot`` with its default parameters (the
     study's own checks: kind of robot, capabilities, reach), with the reason when not."""
-    from legcore.problems.registry import studies
+    from legcore.studies.registry import studies
 
     with _FIT_LOCK:
         if cache_key in _FIT_CACHE:

@@ -15,9 +15,9 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query
 from pydantic import BaseModel, Field
 
-from legcore.problems.registry import needs_text, plugin_errors, studies
-from legcore.problems.study import Study
 from legcore.robots import LeggedRobot, Robot, catalog
+from legcore.studies.registry import needs_text, plugin_errors, studies
+from legcore.studies.study import Study
 from services.api.deps import Context, CurrentKey
 from services.api.errors import invalid
 from services.api.spec_cache import build_robot_cached

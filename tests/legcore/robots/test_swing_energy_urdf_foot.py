@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from legcore.kinematics import fk
-from legcore.problems import swing_energy
 from legcore.robots import build_robot
+from legcore.studies.swing_energy import problem as swing_energy
 
 
 def test_solo12_leg_swings_its_foot_not_its_knee(erd_urdf: Callable[[str], str]) -> None:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from fastapi.testclient import TestClient
 
-from legcore.problems.registry import studies
+from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.store.settings import Settings
 

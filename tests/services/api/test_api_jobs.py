@@ -12,8 +12,8 @@ import pytest
 from api_helpers import finish_like_a_worker, locs, new_key, row_counts
 from fastapi.testclient import TestClient
 
-from legcore.problems.registry import studies
 from legcore.robots import Robot, catalog
+from legcore.studies.registry import studies
 from services.api.deps import ApiContext
 from services.store.lifecycle import claim_job, fail_job
 

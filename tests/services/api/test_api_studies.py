@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from fastapi.testclient import TestClient
 
-from legcore.problems.registry import studies
 from legcore.robots import catalog
+from legcore.studies.registry import studies
 
 API = "/api/v1"
 

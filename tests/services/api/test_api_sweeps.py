@@ -10,8 +10,8 @@ import pytest
 from api_helpers import finish_like_a_worker, locs, row_counts
 from fastapi.testclient import TestClient
 
-from legcore.problems.registry import studies
 from legcore.robots import Robot, catalog
+from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.api.deps import ApiContext
 from services.api.sweeps import SweepError, count_points, expand, get_path, set_path

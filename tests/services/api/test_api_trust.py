@@ -12,7 +12,7 @@ from api_helpers import new_key
 from fastapi.testclient import TestClient
 from sqlalchemy import func, select
 
-from legcore.problems.registry import studies
+from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.api.deps import ApiContext
 from services.store import repository as repo

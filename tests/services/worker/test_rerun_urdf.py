@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from legcore.kinematics import fk
-from legcore.problems.study import Motion
 from legcore.robots import build_robot
+from legcore.studies.study import Motion
 from services.worker import rerun_blueprint as B
 from services.worker import rerun_writer as W
 from tests.recording_fixtures import fake_result

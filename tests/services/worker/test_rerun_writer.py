@@ -18,8 +18,8 @@ from rerun.chunk import RrdReader
 
 from legcore import recording as R
 from legcore.kinematics import frames
-from legcore.problems.study import Box, Motion
 from legcore.robots import catalog
+from legcore.studies.study import Box, Motion
 from services.worker import rerun_blueprint as B
 from services.worker import rerun_merge as M
 from services.worker import rerun_replay as RP

@@ -1,0 +1,479 @@
+"""``hexapod_workspace`` — seed 002: MOEA/D workspace of a hexapod in tripod gait.
+
+Source: seed 002 (Domínguez, Sepúlveda, Montiel, Castillo), §3.1 eqs (11)–(14), §4, Table 2,
+Figs 6–9; robot ``citedi_hexapod`` (see its catalog docstring and docs/legged.md).
+
+Any hexapod with 3-joint legs, three on each side of the walking axis: the catalog's, one from
+URDF, or a parametric one (``hexapod``: leg lengths and hip layout,
+:mod:`legcore.studies.hexapod_workspace.robot`). Legs, tripods and the study frame (walking
+along +y) come from :mod:`legcore.studies.hexapod_workspace.legs`; seed 002's legs use the
+closed forms of its eqs (5)–(10), other legs the numerical FK/IK. Every default is seed 002's.
+
+Problem (eq 11). The tripod 1-3-5 stands on the ground with θ1 = 0, θ2 = −π/8, θ3 = −π/4 on
+every stance leg (stance ``t``). The decision is the new coxa angles ``x = (θ1,1, θ1,3, θ1,5)``
+(``[−π/6, π/6]`` each; θ2, θ3 stay fixed) which put the feet at new body-frame positions
+(eqs 5–7) at ``t+1``. The body can make that move with the feet fixed on the ground only if the
+support triangle at ``t+1`` is congruent to the one at ``t``; the paper asks for two angles and
+the perimeter to be equal and minimises the three errors::
+
+    f1 = |β1ᵗ − β1ᵗ⁺¹|  (rad),   f2 = |β5ᵗ − β5ᵗ⁺¹|  (rad),   f3 = |pᵗ − pᵗ⁺¹|  (m)
+
+with β1, β5 the triangle's angles at feet 1 and 5 and p its perimeter (eqs 12–14, through
+:func:`legcore.gaits.support_triangle`; ``triangle_formula="interior"`` = the exact interior
+angles, ``"paper"`` = eqs 12–13 as printed — see docs/legged.md for their typos). F is computed
+for the whole population in one vectorised call.
+
+Stability (Fig. 6): the body centre must stay inside the support triangle, i.e. the distances
+S_f, S_b along x to the front and back diagonals must be positive. The paper applies it *after*
+the optimisation — its Fig. 9b shows a Pareto-optimal solution "inside the workspace that is not
+viable" — so by default (``stability="classify"``) it is a post-hoc classification of the front
+(the split is in the study extras); ``stability="constraint"`` makes it two constraints
+``G = −(S_f, S_b) ≤ 0`` instead.
+
+Outputs (``extras``): the front with each point's body displacement (a planar rigid fit of the
+new triangle onto the fixed feet), stability and foot slip; the stable/unstable split; the
+workspace of Fig. 8a (the front's body displacements) and the full workspace of Fig. 8b by
+mirroring (front/back mirror of the same tripod: the opposite walking direction; left/right
+mirror: the same solutions for tripod 2-4-6); and, beyond the paper, the exact workspace of body
+poses ``(x, y, yaw)`` reachable with the three feet fixed by the leg IK with θ1, θ2, θ3 free
+(:func:`~legcore.studies.hexapod_workspace.geometry.pose_workspace`).
+
+``solution(x)`` decodes a decision into the body moving from ``t`` to ``t+1`` with the feet fixed
+(joint angles by IK along the fitted body motion, quintic time law), the metrics, a Table-2-like
+per-leg table and the support triangle for the recording. Baselines: the paper's Table 2
+solutions a–d (with the printed numbers beside ours) and the start stance.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from legcore.gaits import stability_margin, support_triangle, tripod_feet, tripod_stability
+from legcore.metrics import hypervolume
+from legcore.robots.capabilities import Needs
+from legcore.studies.hexapod_workspace.geometry import (
+    OTHER_STANCE,
+    Tripod,
+    body_pose_ik,
+    fit_body_motion,
+    is_mirror_symmetric,
+    mirror_front_back,
+    mirror_left_right,
+    pose_workspace,
+    tripod_from_robot,
+)
+from legcore.studies.hexapod_workspace.legs import STANCE_ROLES, leg_roles
+from legcore.studies.hexapod_workspace.params import HV_REF, Params
+from legcore.studies.hexapod_workspace.robot import parametric_hexapod
+from legcore.studies.study import Motion, Solution, Study, StudyProblem
+from legcore.trajectories.profiles import QuinticProfile
+
+__all__ = ["HV_REF", "PAPER_TABLE2", "HexapodWorkspaceProblem", "Params", "STUDY", "build"]
+
+FloatArray = NDArray[np.float64]
+
+#: Seed 002 Table 2 as printed: θ1 of legs 1, 3, 5 (rad), foot x, y (cm) and f1, f2, f3 — the
+#: ``paper_*`` baselines (``paper_baselines``).
+PAPER_TABLE2: dict[str, dict[str, Any]] = {
+    "a": {"theta1": (0.3883, 0.5103, 0.3975), "x_cm": (9.544, 9.198, -9.52),
+          "y_cm": (7.472, -1.81, -2.528), "f": (0.0001, 0.0009, 0.0764)},
+    "b": {"theta1": (-0.5236, -0.2223, 0.4682), "x_cm": (9.155, 9.869, -9.327),
+          "y_cm": (1.735, -6.44, -2.947), "f": (0.0, 0.014, 0.0006)},
+    "c": {"theta1": (-0.3883, -0.5103, -0.3975), "x_cm": (9.544, 9.198, -9.521),
+          "y_cm": (2.528, -8.19, 2.528), "f": (0.0001, 0.0009, 0.0764)},
+    "d": {"theta1": (-0.3883, -0.5069, -0.3975), "x_cm": (9.544, 9.209, -9.521),
+          "y_cm": (2.528, -8.17, 2.528), "f": (0.0001, 0.0009, 0.0759)},
+}
+
+class HexapodWorkspaceProblem(StudyProblem):
+    """Seed 002's eq (11) for one tripod: decision θ1 of (front, back, middle) legs, three
+    objectives (rad, rad, m), optional stability constraints. See the module docstring."""
+
+    objective_names = ("f1_beta1", "f2_beta5", "f3_perimeter")
+    n_samples = 1
+
+    def __init__(self, robot: Any, params: Params) -> None:
+        self.params = params
+        if params.hexapod is not None:
+            robot = parametric_hexapod(params.hexapod)
+        self.robot = robot
+        self.tripod: Tripod = tripod_from_robot(robot, params.stance)
+        roles = leg_roles(robot)
+        self.stance_legs = {k: tuple(roles[r] for r in v) for k, v in STANCE_ROLES.items()}
+        self.theta_start = np.asarray(params.theta1_start, dtype=float)
+        self.theta2, self.theta3 = float(params.theta2), float(params.theta3)
+        self.q_stance = np.column_stack((self.theta_start, np.full(3, self.theta2),
+                                         np.full(3, self.theta3)))  # (3 legs, 3 joints)
+        self._check_limits(params)
+        self.feet_start = self.feet(self.theta_start[None])[0]          # (3, 3) world
+        b1, b5, p = self._triangle(self.feet_start[None])
+        self.beta1_0, self.beta5_0, self.perimeter_0 = float(b1[0]), float(b5[0]), float(p[0])
+        S = self.stability(self.feet_start[None])[0]
+        self.S_start = S
+        self.symmetry = is_mirror_symmetric(robot)
+        n_constr = 2 if params.stability == "constraint" else 0
+        super().__init__(3, 3, n_constr, xl=params.theta1_min, xu=params.theta1_max,
+                         name=f"hexapod_workspace[{'-'.join(self.tripod.legs)}]")
+
+    # ------------------------------------------------------------------ set-up checks
+    def _check_limits(self, params: Params) -> None:
+        t = self.tripod
+        for k, leg in enumerate(t.legs):
+            lo, hi = t.q_min[k], t.q_max[k]
+            if params.theta1_min < lo[0] - 1e-9 or params.theta1_max > hi[0] + 1e-9:
+                raise ValueError(
+                    f"problem.theta1_min: [{params.theta1_min:.4f}, {params.theta1_max:.4f}] rad "
+                    f"exceeds the coxa limits [{lo[0]:.4f}, {hi[0]:.4f}] of leg {leg}")
+            for name, j, v in (("theta1_start", 0, self.theta_start[k]),
+                               ("theta2", 1, self.theta2), ("theta3", 2, self.theta3)):
+                if not lo[j] - 1e-9 <= v <= hi[j] + 1e-9:
+                    raise ValueError(f"problem.{name}: {v:.4f} rad is outside the joint limits "
+                                     f"[{lo[j]:.4f}, {hi[j]:.4f}] of leg {leg}")
+        z = self.feet(self.theta_start[None])[0, :, 2] - t.hips[:, 2, 3]
+        if not np.all(z < 0.0):
+            raise ValueError(f"problem.theta2: the stance feet must be below the hips "
+                             f"(foot z = {z.max():.4f} m from its hip with theta2, theta3 given)")
+
+    # ------------------------------------------------------------------ vectorised pieces
+    def feet(self, theta1: FloatArray) -> FloatArray:
+        """Study-frame feet (B, 3, 3) of coxa angles (B, 3) with θ2, θ3 fixed (eqs 5–7 for
+        seed 002's legs), m."""
+        if self.tripod.closed_form:
+            return tripod_feet(theta1, self.tripod.hips, self.tripod.L, self.theta2, self.theta3)
+        th1 = np.asarray(theta1, dtype=float)
+        q = np.stack(np.broadcast_arrays(th1, self.theta2, self.theta3), -1)
+        return self.tripod.feet(q)
+
+    def _triangle(self, feet: FloatArray) -> tuple[Any, Any, Any]:
+        return support_triangle(feet[..., 0, :], feet[..., 1, :], feet[..., 2, :],
+                                formula=self.params.triangle_formula)
+
+    def stability(self, feet: FloatArray) -> FloatArray:
+        """(B, 2) ``(S_f, S_b)`` (m) of the body centre (origin of the body frame) for body-frame
+        feet (B, 3, 3) in (front, back, middle) order; stable iff both are > 0 (Fig. 6)."""
+        S_f, S_b = tripod_stability(feet[..., 0, :], feet[..., 2, :], feet[..., 1, :])
+        return np.stack((S_f, S_b), axis=-1)
+
+    def objectives(self, X: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``F`` (B, 3), ``S`` (B, 2) = (S_f, S_b), and the feet (B, 3, 3) of a population."""
+        feet = self.feet(X)
+        b1, b5, p = self._triangle(feet)
+        F = np.stack((np.abs(self.beta1_0 - b1), np.abs(self.beta5_0 - b5),
+                      np.abs(self.perimeter_0 - p)), axis=-1)
+        # eq (13) as printed can leave its domain (asin of > 1): count that as the worst error
+        F = np.where(np.isfinite(F), F, math.pi)
+        return F, self.stability(feet), feet
+
+    def _evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray | None]:
+        F, S, _ = self.objectives(X)
+        if self.n_constr == 0:
+            return F, None
+        return F, -np.clip(S, -1.0, 1.0)
+
+    def body_motion(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Body displacement ``(x, y, yaw)`` (B, 3) that best keeps the feet fixed, and the foot
+        slip (B, 3) in m that it leaves (0 for an exactly congruent triangle)."""
+        feet = self.feet(np.atleast_2d(X))
+        d, yaw, slip = fit_body_motion(self.feet_start, feet)
+        return np.column_stack((d, yaw)), slip
+
+    def exact_ik(self, pose: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """Joint angles (B, 3, 3) and per-leg reachability (B, 3) of body poses (B, 3) with the
+        stance feet fixed and θ1, θ2, θ3 free (``knee`` branch, joint limits)."""
+        pose = np.atleast_2d(pose)
+        return body_pose_ik(self.tripod, self.feet_start, pose[:, 0], pose[:, 1], pose[:, 2],
+                            knee=self.params.knee, q_ref=self.q_stance)
+
+    # ------------------------------------------------------------------ decoding
+    def solution(self, x: FloatArray) -> Solution:
+        """Decode coxa angles ``x`` (3,) rad of (front, back, middle) legs.
+
+        ``objectives``: f1, f2 (rad), f3 (m). ``metrics``: ``theta1_<leg>`` (rad); ``beta1``,
+        ``beta5`` (rad), ``perimeter`` (m) at t+1; ``S_f``, ``S_b`` (m, along x, Fig. 6),
+        ``stable`` (1/0), ``stability_margin`` (m, perpendicular distance to the nearest edge,
+        negative outside); ``body_dx``, ``body_dy`` (m), ``body_dyaw`` (rad): the rigid body
+        motion that best keeps the feet fixed, ``foot_slip_max`` (m) the slip it leaves;
+        ``exact_reachable`` (1/0): that pose is reachable with the feet exactly fixed (IK,
+        θ2/θ3 free), ``theta2_exact_max_dev``/``theta3_exact_max_dev`` (rad) how far θ2/θ3 must
+        then leave their fixed values; ``motion_feet_fixed`` (1/0) whether the motion keeps the
+        feet fixed (else it is the paper's θ1 interpolation). Undefined values (the θ2/θ3
+        deviations of an unreachable pose; S_f/S_b when a diagonal is parallel to x) are left
+        out / None, so ``decode(x)`` is strict JSON. ``table``: per-leg rows like Table 2.
+        ``extra``: legs, feet at t and t+1, body pose, exact joint angles.
+        """
+        x = np.asarray(x, dtype=float).reshape(-1)
+        if x.shape != (3,) or not np.all(np.isfinite(x)):
+            raise ValueError(f"x: expected 3 finite coxa angles (rad), got {x.tolist()}")
+        F, S, feet = self.objectives(x[None])
+        F, S, feet = F[0], S[0], feet[0]
+        pose, slip = self.body_motion(x[None])
+        pose, slip = pose[0], slip[0]
+        q_exact, ok_exact = self.exact_ik(pose[None])
+        q_exact, ok_exact = q_exact[0], ok_exact[0]
+        b1, b5, p = self._triangle(feet[None])
+        legs = self.tripod.legs
+        stable = bool(S[0] > 0.0 and S[1] > 0.0)
+        motion, feet_fixed = self._motion(x, pose)
+        with np.errstate(invalid="ignore"):
+            dev2 = float(np.nanmax(np.abs(q_exact[:, 1] - self.theta2))) if ok_exact.all() \
+                else float("nan")
+            dev3 = float(np.nanmax(np.abs(q_exact[:, 2] - self.theta3))) if ok_exact.all() \
+                else float("nan")
+        metrics: dict[str, float] = {
+            **{f"theta1_{leg}": float(v) for leg, v in zip(legs, x, strict=True)},
+            "beta1": float(b1[0]), "beta5": float(b5[0]), "perimeter": float(p[0]),
+            "S_f": float(S[0]), "S_b": float(S[1]), "stable": float(stable),
+            # an unbounded distance (diagonal ~parallel to x) is no number: null + this flag
+            "S_f_unbounded": float(not math.isfinite(S[0])),
+            "S_b_unbounded": float(not math.isfinite(S[1])),
+            "stability_margin": float(stability_margin(feet)),
+            "body_dx": float(pose[0]), "body_dy": float(pose[1]), "body_dyaw": float(pose[2]),
+            "foot_slip_max": float(slip.max()),
+            "exact_reachable": float(ok_exact.all()),
+            "theta2_exact_max_dev": dev2, "theta3_exact_max_dev": dev3,
+            "motion_feet_fixed": float(feet_fixed),
+        }
+        # strict JSON: an undefined value (unreachable pose, diagonal parallel to x) is left out
+        metrics = {k: v for k, v in metrics.items() if math.isfinite(v)}
+        table = [
+            {"metric": "theta1", "unit": "rad", "values": x.tolist()},
+            {"metric": "foot_x", "unit": "m", "values": feet[:, 0].tolist()},
+            {"metric": "foot_y", "unit": "m", "values": feet[:, 1].tolist()},
+            {"metric": "foot_slip", "unit": "m", "values": slip.tolist()},
+            {"metric": "theta2_exact", "unit": "rad", "values": _json_list(q_exact[:, 1])},
+            {"metric": "theta3_exact", "unit": "rad", "values": _json_list(q_exact[:, 2])},
+        ]
+        extra = {
+            "legs": list(legs),
+            "feet_t": self.feet_start.tolist(),
+            "feet_t1_body": feet.tolist(),
+            "body_pose": pose.tolist(),
+            "q_exact": _json_list(q_exact),
+            "stable": stable,
+        }
+        return Solution(x=x.copy(), objectives=dict(zip(self.objective_names, F.tolist(),
+                                                        strict=True)),
+                        metrics=metrics, table=table, motion=motion, extra=extra)
+
+    def _motion(self, x: FloatArray, pose: FloatArray) -> tuple[Motion, bool]:
+        """Body moving from t to t+1 with the feet fixed: poses s·(x, y, yaw) along a quintic
+        time law, legs by IK. Where IK fails somewhere on the way, fall back to the paper's
+        motion (θ1 linear, θ2, θ3 fixed; feet may slip) and say so."""
+        p = self.params
+        K = p.motion_samples
+        t = np.linspace(0.0, p.duration, K)
+        s = QuinticProfile(p.duration).s(t)
+        poses = s[:, None] * pose[None, :]
+        q, ok = self.exact_ik(poses)
+        feet_fixed = bool(ok.all())
+        if not feet_fixed:
+            th1 = self.theta_start + s[:, None] * (x - self.theta_start)
+            q = np.stack((th1, np.full_like(th1, self.theta2), np.full_like(th1, self.theta3)),
+                         axis=-1)
+            poses, _ = self.body_motion(th1)
+        Q = q.reshape(K, 9)
+        qd: FloatArray = np.asarray(np.gradient(Q, t, axis=0))
+        qdd: FloatArray = np.asarray(np.gradient(qd, t, axis=0))
+        c, sn = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        body_T = np.zeros((K, 4, 4))
+        body_T[:, 0, 0], body_T[:, 0, 1], body_T[:, 1, 0], body_T[:, 1, 1] = c, -sn, sn, c
+        body_T[:, 2, 2] = body_T[:, 3, 3] = 1.0
+        body_T[:, 0, 3], body_T[:, 1, 3] = poses[:, 0], poses[:, 1]
+        tool = np.column_stack((poses[:, 0], poses[:, 1], np.zeros(K)))
+        legs = self.tripod.legs
+        names = tuple(f"{leg}.q{j + 1}" for leg in legs for j in range(3))
+        scene: dict[str, Any] = {
+            "frame": "world = study frame at stance t (z up, walking along +y)",
+            "support_polygon": self.feet_start[[0, 2, 1]],     # front, middle, back
+            "feet": {leg: self.feet_start[k] for k, leg in enumerate(legs)},
+            "ground_z": float(self.feet_start[0, 2]),
+            "body_T": body_T,
+            "body_size": tuple(float(v) for v in getattr(self.robot, "body_size", ())),
+            "hips": {leg: self.tripod.hips[k] for k, leg in enumerate(legs)},
+            "tool": "body centre path (the moving platform of the Delta analogy, Fig. 4)",
+        }
+        motion = Motion(t=t, q=Q, joint_names=names, qd=qd, qdd=qdd, tool=tool,
+                        robot=getattr(self.robot, "name", ""), legs=legs, scene=scene)
+        return motion, feet_fixed
+
+    # ------------------------------------------------------------------ baselines
+    def baseline_solutions(self) -> dict[str, Solution]:
+        """The start stance (F = 0: the ideal point), the paper's straight walk of §3 (front and
+        back legs −Δθ1, middle leg +Δθ1, ``straight_step``) and its Table 2 solutions a–d
+        (printed values in ``extra["paper"]``; mirrored left/right, θ → −θ, for stance 2-4-6)."""
+        out: dict[str, Solution] = {}
+        out["start"] = self.solution(self.theta_start)
+        step = self.params.straight_step * np.array([-1.0, -1.0, 1.0])
+        if self.params.stance == "246":
+            step = mirror_left_right(step)
+        straight = np.clip(self.theta_start + step, self.xl, self.xu)
+        out["straight_walk"] = self.solution(straight)
+        for key, row in (PAPER_TABLE2 if self.params.paper_baselines else {}).items():
+            theta = np.asarray(row["theta1"], dtype=float)
+            if self.params.stance == "246":
+                theta = mirror_left_right(theta)
+            sol = self.solution(theta)
+            paper = {
+                "theta1": list(row["theta1"]),
+                "foot_x_m": [v / 100.0 for v in row["x_cm"]],
+                "foot_y_m": [v / 100.0 for v in row["y_cm"]],
+                "f": list(row["f"]),
+                "note": ("printed for legs L1, L3, L5; f3 presumably in cm"
+                         + ("; mirrored onto L4, L6, L2" if self.params.stance == "246" else "")),
+            }
+            out[f"paper_{key}"] = Solution(x=sol.x, objectives=sol.objectives,
+                                           metrics=sol.metrics, table=sol.table,
+                                           motion=sol.motion, extra={**sol.extra, "paper": paper})
+        return out
+
+    # ------------------------------------------------------------------ study-level outputs
+    def front_report(self, X: FloatArray) -> dict[str, Any]:
+        """Per-point data of a front X (k, 3): F, S_f/S_b, stable flag, body pose, slip, and
+        whether the fitted pose is exactly reachable (IK, θ2/θ3 free)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        F, S, _ = self.objectives(X)
+        pose, slip = self.body_motion(X)
+        q, ok = self.exact_ik(pose)
+        stable = (S[:, 0] > 0.0) & (S[:, 1] > 0.0)
+        return {"theta1": X, "F": F, "S": S, "stable": stable, "pose": pose, "slip": slip,
+                "exact_reachable": ok.all(axis=-1), "q_exact": q}
+
+    def pose_workspace(self) -> Any:
+        """The exact body-pose workspace on the ``Params`` grid (see geometry module)."""
+        x, y, yaw = self.params.pose_grid()
+        return pose_workspace(self.tripod, self.feet_start, x, y, yaw, knee=self.params.knee,
+                              q_ref=self.q_stance)
+
+    def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
+        p = self.params
+        X = np.asarray(front_X, dtype=float).reshape(-1, 3)
+        k = X.shape[0]
+        rep = self.front_report(X) if k else None
+        out: dict[str, Any] = {
+            "legs": list(self.tripod.legs),
+            "units": {"theta1": "rad", "f1_beta1": "rad", "f2_beta5": "rad",
+                      "f3_perimeter": "m", "pose": "(m, m, rad)", "S": "m"},
+            "stance_t": {
+                "theta1": self.theta_start.tolist(), "theta2": self.theta2,
+                "theta3": self.theta3, "feet": self.feet_start.tolist(),
+                "beta1": self.beta1_0, "beta5": self.beta5_0, "perimeter": self.perimeter_0,
+                "S_f": float(self.S_start[0]), "S_b": float(self.S_start[1]),
+            },
+        }
+        if rep is None:
+            out["front"] = {"n": 0}
+            out["stability_split"] = {"mode": p.stability, "n_front": 0, "n_stable": 0,
+                                      "n_unstable": 0}
+        else:
+            stable = rep["stable"]
+            out["front"] = {
+                "n": k,
+                "theta1": X.tolist(),
+                "F": rep["F"].tolist(),
+                "S_f": rep["S"][:, 0].tolist(),
+                "S_b": rep["S"][:, 1].tolist(),
+                "stable": stable.tolist(),
+                "body_pose": rep["pose"].tolist(),
+                "foot_slip_max": rep["slip"].max(axis=1).tolist(),
+                "exact_reachable": rep["exact_reachable"].tolist(),
+            }
+            out["stability_split"] = {
+                "mode": p.stability,
+                "n_front": k,
+                "n_stable": int(stable.sum()),
+                "n_unstable": int((~stable).sum()),
+                "fraction_stable": float(stable.mean()),
+                "unstable_index": np.flatnonzero(~stable).tolist(),
+            }
+            out["workspace"] = self.mirrored_workspace(X, rep)
+            ref = np.asarray(p.hv_ref_point, dtype=float)
+            hv = hypervolume(np.asarray(front_F, dtype=float).reshape(-1, 3), ref)
+            out["hypervolume"] = {"value": hv.value, "ref_point": list(hv.ref_point),
+                                  "normalised": hv.value / float(np.prod(ref)),
+                                  "n_points": hv.n_points}
+        ws = self.pose_workspace()
+        out["pose_workspace"] = ws.summary()
+        if rep is not None:
+            out["pose_workspace"]["front_poses_reachable"] = int(rep["exact_reachable"].sum())
+        return out
+
+    def mirrored_workspace(self, X: FloatArray, rep: dict[str, Any] | None = None
+                           ) -> dict[str, Any]:
+        """Fig. 8a (the front's body displacements) and Fig. 8b (with the mirrored solutions).
+
+        ``front``: body poses (k, 3) and body-frame feet at t+1 (k, 3, 2) of the front (the
+        paper's Matlab plots move the feet, not the body); ``mirrored``: the front/back mirror
+        (same tripod, opposite walking direction), re-evaluated; ``full``: both; ``other_tripod``:
+        the left/right mirror — the same front for the other tripod (identical objectives).
+        """
+        rep = rep or self.front_report(X)
+        out: dict[str, Any] = {"front": {"theta1": X.tolist(), "body_pose": rep["pose"].tolist(),
+                                         "feet_xy": self.feet(X)[..., :2].tolist(),
+                                         "stable": rep["stable"].tolist()}}
+        if not self.symmetry["front_back"]:
+            out["mirrored"] = None
+            out["note"] = "robot hips are not front/back symmetric: no mirrored workspace"
+            return out
+        Xm = mirror_front_back(X)
+        rm = self.front_report(Xm)
+        out["mirrored"] = {"theta1": Xm.tolist(), "body_pose": rm["pose"].tolist(),
+                           "feet_xy": self.feet(Xm)[..., :2].tolist(),
+                           "F": rm["F"].tolist(), "stable": rm["stable"].tolist()}
+        full_pose = np.vstack((rep["pose"], rm["pose"]))
+        full_stable = np.concatenate((rep["stable"], rm["stable"]))
+        out["full"] = {
+            "body_pose": full_pose.tolist(),
+            "stable": full_stable.tolist(),
+            "x_range": [float(full_pose[:, 0].min()), float(full_pose[:, 0].max())],
+            "y_range": [float(full_pose[:, 1].min()), float(full_pose[:, 1].max())],
+            "yaw_range": [float(full_pose[:, 2].min()), float(full_pose[:, 2].max())],
+        }
+        if self.symmetry["left_right"]:
+            other = OTHER_STANCE[self.params.stance]
+            out["other_tripod"] = {
+                "legs": list(self.stance_legs[other]),
+                "theta1": mirror_left_right(X).tolist(),
+                "body_pose": (rep["pose"] * np.array([-1.0, 1.0, -1.0])).tolist(),
+            }
+        return out
+
+
+def _json_list(a: FloatArray) -> Any:
+    """``a.tolist()`` with NaN/inf as None (strict JSON)."""
+    arr = np.asarray(a, dtype=object)
+    arr[~np.isfinite(np.asarray(a, dtype=float))] = None
+    return arr.tolist()
+
+
+def build(robot: Any, params: Params) -> HexapodWorkspaceProblem:
+    """The study problem for ``robot`` (a hexapod with 3-joint legs, or the parametric one of
+    ``params.hexapod``) and ``params``."""
+    if not isinstance(params, Params):
+        params = Params.model_validate(params)
+    return HexapodWorkspaceProblem(robot, params)
+
+
+STUDY = Study(
+    kind="hexapod_workspace",
+    title="Hexapod tripod workspace by MOEA/D (seed 002)",
+    seed_paper="002",
+    params=Params,
+    default_robot="citedi_hexapod",
+    default_optimizer={"kind": "moead", "params": {"n_subproblems": 300, "n_neighbors": 20}},
+    default_generations=100,
+    build=build,
+    robot_kinds=("legged",),
+    needs=(Needs(legged=True, n_legs=(6,), leg_joints=(3, 3), revolute=True),),
+    description=(
+        "A hexapod (six legs of 3 joints, three on each side) stands on a tripod; the decision "
+        "is the first (coxa) joint of the three stance legs, the others held. MOEA/D minimises "
+        "the errors of the support triangle's two angles and perimeter (the body can move with "
+        "the feet fixed); reports the front, its stable/unstable split, the mirrored workspace "
+        "and the exact (x, y, yaw) workspace of the body with the feet fixed. A parametric "
+        "hexapod (problem.hexapod: leg lengths, hip layout) replaces the robot."
+    ),
+)

@@ -1,0 +1,134 @@
+"""A study's task made concrete for one robot: robot-relative defaults, the paper's preset, the
+pre-flight check, and what an infeasible answer violates (DESIGN §5).
+
+Every parameter of a study kind that depends on the robot (a leg's start and end postures, a
+gait's speed, an arm's path and where it lies) is *derived from the robot it is given*, by a
+documented rule, whenever the user leaves it out; a value the user gives is always used as
+given. A study kind states that rule as its ``derive`` function
+(``legcore/studies/<kind>/defaults.py``):
+
+    derive(robot, params) -> Task
+
+which returns the parameters with every unset robot-relative field filled in, the rule that
+gave each (``Task.rules``, in words with the numbers), and raises
+``ValueError("<field>: <why>; <what to change>")`` when the task — given or derived — cannot
+work on this robot (the cheap pre-flight check: a path out of reach, no standing posture, a
+step longer than the leg can make). A refusal is found before the job is queued.
+
+A paper's own settings are data, not a branch: a :class:`Preset` names the paper's robot (a
+catalog name) and the parameter values the paper used; on that robot — the same model, not just
+the same name — the preset fills the unset fields first, so every seed number is reproduced with
+the defaults, and ``derive`` sees them as given.
+
+A run's answer states whether it is feasible: :class:`Violation` is one violated constraint of a
+solution with its size (``StudyProblem.violations``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["Fit", "Preset", "Task", "Violation", "fill"]
+
+
+@dataclass(frozen=True)
+class Task:
+    """The parameters of a job on one robot: ``params`` (the study's ``Params`` with every
+    robot-relative default filled in) and ``rules`` (field → the rule that gave its value, with
+    the numbers, e.g. ``"0.6 × leg length (0.32 m) = 0.192 m below the hip"``; empty for the
+    values the user gave). ``preset``: the paper whose settings filled the unset fields (its
+    source text), or None."""
+
+    params: Any
+    rules: Mapping[str, str] = field(default_factory=dict)
+    preset: str | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able: ``{"params": {...}, "rules": {...}, "preset": ...}``."""
+        return {"params": self.params.model_dump(mode="json"), "rules": dict(self.rules),
+                "preset": self.preset}
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A paper's settings on its own robot.
+
+    ``robot``: the catalog name of the paper's robot; ``params``: the study parameters the
+    paper used (JSON-able values, validated by the study's ``Params``); ``source``: the paper
+    and table. It applies to a robot whose model equals the catalog robot's (same name and same
+    spec, so an edited copy of the robot gets robot-relative defaults instead).
+    """
+
+    robot: str
+    params: Mapping[str, Any]
+    source: str
+
+    def applies(self, robot: Any) -> bool:
+        """True when ``robot`` is this preset's catalog robot (same name and same model)."""
+        if getattr(robot, "name", None) != self.robot:
+            return False
+        from legcore.robots import catalog
+
+        try:
+            paper_robot = catalog.get(self.robot)
+        except KeyError:
+            return False
+        return robot is paper_robot or getattr(robot, "spec", None) == paper_robot.spec
+
+
+def fill(params: Any, values: Mapping[str, Any]) -> Any:
+    """``params`` with the fields the user left unset taken from ``values`` (validated by the
+    params model; the filled fields then count as set)."""
+    given = params.model_dump(exclude_unset=True)
+    missing = {k: v for k, v in values.items() if k not in params.model_fields_set}
+    if not missing:
+        return params
+    return type(params).model_validate({**missing, **given})
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One constraint a solution violates: ``constraint`` (its name, a column of ``G``),
+    ``amount`` (how far past its limit, > 0, in ``unit``; for a ratio constraint such as
+    ``max|q̇|/q̇_max − 1`` the fraction over, unit ``""``) and ``text`` (in words, e.g.
+    ``"peak joint speed 12 % over its limit"``)."""
+
+    constraint: str
+    amount: float
+    unit: str = ""
+    text: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"constraint": self.constraint, "amount": float(self.amount), "unit": self.unit,
+                "text": self.text or f"{self.constraint} violated by {self.amount:.4g}"
+                                     f"{(' ' + self.unit) if self.unit else ''}"}
+
+
+@dataclass(frozen=True)
+class Fit:
+    """Does a study fit a robot — the one answer every listing and the submission give.
+
+    ``accepted``: the robot has what the study needs and the task (the defaults, or the given
+    parameters) passes the pre-flight check; then ``task`` is it. Otherwise ``field`` names
+    what to change (``robot`` for a missing capability, else the parameter) and ``reason``
+    says why and what to do.
+    """
+
+    kind: str
+    accepted: bool
+    reason: str | None = None
+    field: str | None = None
+    task: Task | None = None
+
+    @property
+    def message(self) -> str | None:
+        """``"<field>: <reason>"`` (the ValueError text a submission is refused with)."""
+        return None if self.accepted else f"{self.field}: {self.reason}"
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able: kind, accepted, field, reason, and the task's rules when accepted."""
+        return {"kind": self.kind, "accepted": self.accepted, "field": self.field,
+                "reason": self.reason,
+                "task": None if self.task is None else self.task.as_dict()}
