@@ -17,9 +17,10 @@ objective under another name) and is left out of tables (``--json`` keeps it).
 
 from __future__ import annotations
 
+import importlib
 import re
-from dataclasses import dataclass
-from typing import Literal
+
+from legcore.studies.naming import MetricName, StudyDisplay
 
 __all__ = [
     "BASELINE_NAMES",
@@ -35,33 +36,10 @@ __all__ = [
     "metric_name",
 ]
 
-Sense = Literal["min", "max", ""]
-Kind = Literal["value", "flag"]
+M = MetricName
 
 #: Prefix of an objective that is the negation of a maximised quantity.
 NEGATED_PREFIX = "neg_"
-
-
-@dataclass(frozen=True)
-class MetricName:
-    """How to show one result key.
-
-    ``label``: readable name; ``unit``: SI unit ("" when dimensionless); ``sense``: "min" or
-    "max" when smaller/larger is better, "" otherwise; ``paper``: the paper's own symbol;
-    ``kind``: "flag" for 0/1 values (shown yes/no); ``same_as``: the key whose number this
-    repeats (then hidden in tables); ``note``: what a reader must know (a different formula).
-    """
-
-    label: str
-    unit: str = ""
-    sense: Sense = ""
-    paper: str = ""
-    kind: Kind = "value"
-    same_as: str | None = None
-    note: str = ""
-
-
-M = MetricName
 
 #: Keys shared by several studies (a study's own entry below wins).
 _COMMON: dict[str, MetricName] = {
@@ -74,126 +52,34 @@ _COMMON: dict[str, MetricName] = {
     "cv": M("constraint violation", ""),
 }
 
-#: kind -> key -> name. Objective keys appear under their displayed name (``score``, not
-#: ``neg_score``).
-METRICS: dict[str, dict[str, MetricName]] = {
-    "swing_energy": {
-        "score": M("score F = w1·f_d + w2·f_a (best 10)", "", "max", "F"),
-        "f_d": M("joint displacement criterion", "", "max", "f_d"),
-        "f_a": M("joint acceleration criterion", "", "max", "f_a"),
-        "theta_total": M("total joint travel", "rad", "min", "θ_T"),
-        "path_length": M("foot path length", "m", "min", "D_PFE"),
-        "energy_total": M("swing energy ∫|τ·ω|dt", "J", "min", "E_T"),
-        "tau_sq_total": M("squared-torque integral ∫τ²dt", "N²·m²·s", "min", "T_cuad"),
-        "duration": M("swing duration", "s", "", "T"),
-        "criterion": M("the GA's criterion", same_as="score"),
-        "ground_clearance": M("least ground clearance", "m"),
-        "on_grid": M("on the control-resolution grid", kind="flag"),
-        "lift_height": M("foot lift height", "m"),
-        "g_ground": M("ground constraint g (≤ 0 holds)", "m"),
-        "g_obstacle": M("obstacle constraint g (≤ 0 holds)", "m"),
-        "obstacle_clearance": M("least obstacle clearance", "m"),
-    },
-    "path_placement": {
-        "J": M("cost J = energy + manipulability terms", "", "min", "J"),
-        "energy_J": M("energy", "J", "min", "E",
-                      note="electrical where the robot has motor data, else mechanical "
-                      "(extra.energy_kind says which)"),
-        "energy_kWh": M("energy", "kWh", same_as="energy_J"),
-        "mean_manipulability": M("mean manipulability", "m³", "max", "w̄"),
-        "mean_manipulability_ratio": M("mean manipulability / its maximum", "", "max"),
-        "time_s": M("path time", "s"),
-        "mean_power_W": M("mean power", "W"),
-        "peak_power_W": M("peak power", "W"),
-        "J_energy_term": M("energy term of J", ""),
-        "J_manipulability_term": M("manipulability term of J", ""),
-        "constraint_violation": M("constraint violation", ""),
-        "unreachable_fraction": M("unreachable path points (fraction)", ""),
-        "R": M("placement distance R", "m"),
-        "gamma": M("placement angle γ", "rad"),
-        "phi": M("placement angle φ", "rad"),
-        "branch_index": M("IK branch (index)", ""),
-        "energy_change_pct": M("energy change vs the original placement", "%", "min"),
-        "manipulability_change_pct": M(
-            "manipulability change vs the original placement", "%", "max"
-        ),
-        "time_change_pct": M("time change vs the original placement", "%"),
-        "paper_energy_pct": M("energy saved", "%", same_as="energy_change_pct"),
-        "paper_time_pct": M("time saved", "%", same_as="time_change_pct"),
-        "paper_manipulability_pct": M(
-            "manipulability gain / optimised value",
-            "%",
-            "max",
-            "% w",
-            note="(optimised − original) / optimised, the paper's formula for both columns",
-        ),
-    },
-    "hexapod_workspace": {
-        "f1_beta1": M("error of the triangle angle β1", "rad", "min", "f1"),
-        "f2_beta5": M("error of the triangle angle β5", "rad", "min", "f2"),
-        "f3_perimeter": M("error of the triangle perimeter", "m", "min", "f3"),
-        "beta1": M("support-triangle angle β1", "rad"),
-        "beta5": M("support-triangle angle β5", "rad"),
-        "perimeter": M("support-triangle perimeter", "m"),
-        "S_f": M("front stability distance", "m", "", "S_f"),
-        "S_b": M("back stability distance", "m", "", "S_b"),
-        "S_f_unbounded": M("front stability distance unbounded (null)", kind="flag"),
-        "S_b_unbounded": M("back stability distance unbounded (null)", kind="flag"),
-        "stable": M("statically stable", kind="flag"),
-        "stability_margin": M("stability margin", "m", "max"),
-        "body_dx": M("body shift x", "m"),
-        "body_dy": M("body shift y", "m"),
-        "body_dyaw": M("body yaw", "rad"),
-        "foot_slip_max": M("largest foot slip", "m", "min"),
-        "exact_reachable": M("reachable with θ2, θ3 free", kind="flag"),
-        "theta2_exact_max_dev": M("largest θ2 change for that pose", "rad"),
-        "theta3_exact_max_dev": M("largest θ3 change for that pose", "rad"),
-        "motion_feet_fixed": M("a body motion keeps the feet", kind="flag"),
-    },
-    "quadruped_gait": {
-        "energy_per_metre": M("energy per metre walked", "J/m", "min"),
-        "energy_per_cycle": M("energy per gait cycle", "J", "min"),
-        "energy_per_metre_J_per_m": M("energy per metre walked", "J/m", same_as="energy_per_metre"),
-        "energy_per_cycle_J": M("energy per gait cycle", "J", same_as="energy_per_cycle"),
-        "energy_swing_J": M("energy of the swing phases", "J"),
-        "energy_stance_J": M("energy of the stance phases", "J"),
-        "cycle_time_s": M("cycle time", "s"),
-        "distance_per_cycle_m": M("distance per cycle", "m"),
-        "speed_m_s": M("body speed", "m/s"),
-        "step_length_m": M("step length", "m"),
-        "step_height_m": M("step height", "m"),
-        "duty": M("duty factor β", ""),
-        "min_stability_margin_m": M("least static stability margin", "m", "max"),
-        "airborne": M("no foot on the ground at some instant (margin null)", kind="flag"),
-        "required_stability_margin_m": M("required stability margin", "m"),
-        "max_joint_speed_ratio": M("joint speed / limit (max)", ""),
-        "max_torque_ratio": M("torque / servo torque (max)", ""),
-        "max_torque_Nm": M("largest joint torque", "N·m"),
-        "max_joint_speed_rad_s": M("largest joint speed", "rad/s"),
-        "max_foot_load_N": M("largest foot load", "N"),
-        "min_foot_load_N": M("least foot load", "N"),
-        "reachable": M("every sample reachable", kind="flag"),
-    },
-    "path_tracking": {
-        "energy": M("mechanical energy ∫|τ·ω|dt", "J", "min"),
-        "tool_speed_max": M("largest tool speed", "m/s"),
-        "qd_use_max": M("joint speed / limit (max)", ""),
-        "qdd_use_max": M("joint acceleration / limit (max)", ""),
-        "tau_use_max": M("joint torque / limit (max)", ""),
-        "t_a": M("start ramp time t_a", "s", "", "t_a"),
-        "t_d": M("stop ramp time t_d", "s", "", "t_d"),
-        "t_b": M("blend time t_b", "s"),
-        "ramp_shrink": M("ramp scale (1: as asked)", ""),
-    },
-}
+#: The study packages whose ``metrics.py`` name their keys (plug-ins' keys get generic names).
+_STUDY_KINDS = ("swing_energy", "path_placement", "hexapod_workspace", "quadruped_gait",
+                "path_tracking")
 
+
+def _load() -> tuple[dict[str, dict[str, MetricName]],
+                     tuple[tuple[str, re.Pattern[str], str, str], ...],
+                     dict[str, str], dict[str, StudyDisplay]]:
+    metrics, patterns, baselines, display = {}, [], {}, {}
+    for kind in _STUDY_KINDS:
+        mod = importlib.import_module(f"legcore.studies.{kind}.metrics")
+        metrics[kind] = dict(mod.METRICS)
+        patterns += [(kind, rx, label, unit) for rx, label, unit in mod.PATTERNS]
+        baselines.update(mod.BASELINES)
+        display[kind] = mod.DISPLAY
+    return metrics, tuple(patterns), baselines, display
+
+
+#: kind -> key -> name (each study's ``metrics.py``). Objective keys appear under their
+#: displayed name (``score``, not ``neg_score``).
+METRICS: dict[str, dict[str, MetricName]]
 #: Key patterns (kind, regex, label template with the groups, unit).
-_PATTERNS: tuple[tuple[str, re.Pattern[str], str, str], ...] = (
-    ("path_tracking", re.compile(r"T_(\d+)$"), "time on segment {0}", "s"),
-    ("path_tracking", re.compile(r"V_(\d+)$"), "cruise speed on segment {0}", "m/s"),
-    ("quadruped_gait", re.compile(r"energy_(\w+)_J$"), "energy of leg {0}", "J"),
-    ("hexapod_workspace", re.compile(r"theta1_L(\d+)$"), "coxa angle θ1 of leg {0}", "rad"),
-)
+_PATTERNS: tuple[tuple[str, re.Pattern[str], str, str], ...]
+#: Baseline names → readable labels.
+BASELINE_NAMES: dict[str, str]
+#: kind → what its one-block summary shows.
+STUDY_DISPLAY: dict[str, StudyDisplay]
+METRICS, _PATTERNS, BASELINE_NAMES, STUDY_DISPLAY = _load()
 
 #: Unit suffixes of keys no table names (longest first): suffix -> unit.
 _SUFFIXES: tuple[tuple[str, str], ...] = (
@@ -201,27 +87,6 @@ _SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_pct", "%"), ("_Nm", "N·m"), ("_rad", "rad"), ("_deg", "°"), ("_kg", "kg"),
     ("_J", "J"), ("_W", "W"), ("_N", "N"), ("_m", "m"), ("_s", "s"),
 )  # fmt: skip
-
-#: Baseline names → readable labels.
-BASELINE_NAMES: dict[str, str] = {
-    "calderon2008_parabolic": "parabolic swing (Calderón 2008)",
-    "tian_collins2004_min_displacement": "least joint travel (Tian & Collins 2004)",
-    "shankar_kaur2011_min_distance": "shortest foot path (Shankar & Kaur 2011)",
-    "solteiro2007_multi_criteria": "multi-criteria (Solteiro 2007)",
-    "perez2010_min_energy": "least energy (Pérez 2010)",
-    "original": "original placement",
-    "start": "start stance",
-    "straight_walk": "straight walk (5°)",
-    "paper_a": "paper's solution a",
-    "paper_b": "paper's solution b",
-    "paper_c": "paper's solution c",
-    "paper_d": "paper's solution d",
-    "default_step": "default step",
-    "paper_walk": "paper's walk (β = 0.75)",
-    "seed": "paper's time law",
-    "seed_max_V": "paper's law at its top speed",
-}
-
 
 #: Row labels of the per-joint tables (seed 000 Table 2 notation and the studies' own) →
 #: readable names; the label itself is printed beside as the paper's symbol.
@@ -261,49 +126,6 @@ def joint_row_name(symbol: str) -> str:
     """``readable name (symbol)`` of a per-joint table row (the symbol alone when unknown)."""
     name = JOINT_ROW_NAMES.get(symbol)
     return f"{name} ({symbol})" if name and name != symbol else symbol
-
-
-@dataclass(frozen=True)
-class StudyDisplay:
-    """What a study's one-block summary shows.
-
-    ``task``: what the optimiser chooses; ``start``: the baseline shown as the starting point
-    (the solution the optimum improves on); ``headline``: the metric keys shown after the
-    objectives, in order.
-    """
-
-    task: str
-    start: str | None
-    headline: tuple[str, ...]
-
-
-STUDY_DISPLAY: dict[str, StudyDisplay] = {
-    "swing_energy": StudyDisplay(
-        "the swing trajectory of one leg (joint via points)",
-        "calderon2008_parabolic",
-        ("energy_total", "theta_total", "path_length"),
-    ),
-    "path_placement": StudyDisplay(
-        "where the welding path sits in front of the arm (R, γ, φ)",
-        "original",
-        ("energy_J", "mean_manipulability", "time_s"),
-    ),
-    "hexapod_workspace": StudyDisplay(
-        "the coxa angles θ1 of the three stance legs",
-        "start",
-        ("foot_slip_max", "stable"),
-    ),
-    "quadruped_gait": StudyDisplay(
-        "step length, step height and duty factor of the walk",
-        "default_step",
-        ("step_length_m", "step_height_m", "duty", "min_stability_margin_m"),
-    ),
-    "path_tracking": StudyDisplay(
-        "the speed of each path segment and the ramp times",
-        "seed",
-        ("time", "energy"),
-    ),
-}
 
 
 def metric_name(key: str, kind: str | None = None) -> MetricName:
