@@ -30,6 +30,9 @@ PRESETS = ROOT / "examples" / "presets"
 MATRIX_ROBOTS: dict[str, tuple[str, dict[str, Any]]] = {
     "ur5": ("ur5", {}),
     "panda": ("panda", {"locked_joints": {"panda_finger_joint1": 0.02}}),
+    "kinova": ("kinova", {}),
+    "z1": ("z1", {"locked_joints": {"jointGripper": None}}),
+    "so100": ("so100", {"locked_joints": {"gripper": None}}),
     "solo12_leg": ("solo12", {"legs": "auto", "leg": "FL"}),  # one leg, a serial chain
     "solo12": ("solo12", {"legs": "auto"}),
     "anymal": ("anymal", {"legs": "auto"}),
