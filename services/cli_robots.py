@@ -133,6 +133,26 @@ def _print_robot(robot: dict[str, Any]) -> None:
     t.add_row("motor data (Kt, Ke, R)", elec)
     t.add_row("torque limits", "yes" if caps.get("torque_limits") else "not on every joint")
     console.print(t)
+    fits = robot.get("studies")
+    if fits:
+        s = Table(title="study kinds (with their default task)")
+        for col in ("study", "accepts", "default task, or why not"):
+            s.add_column(col, overflow="fold")
+        for f in fits:
+            s.add_row(f["kind"], "yes" if f["accepted"] else "no", _fit_text(f))
+        console.print(s)
+
+
+def _fit_text(fit: dict[str, Any]) -> str:
+    """The rules of an accepted study's default task (or its paper's preset), or the field to
+    change and why it is refused."""
+    if not fit.get("accepted"):
+        field = fit.get("field")
+        return f"{field}: {fit.get('reason')}" if field else str(fit.get("reason"))
+    if fit.get("preset"):
+        return f"the paper's settings ({fit['preset']})"
+    rules = fit.get("rules") or {}
+    return "; ".join(f"{k}: {v}" for k, v in rules.items()) or "its defaults"
 
 
 def _find(c: Any, reference: str) -> dict[str, Any]:
@@ -231,7 +251,8 @@ def show(
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:
-    """One robot: its model summary and capabilities (with --json, the whole record)."""
+    """One robot: its model summary, capabilities and the study kinds that accept it with their
+    default task, or why not (with --json, the whole record)."""
     with client(url, key) as c:
         robot = api_call(_find, c, reference)
     if as_json:

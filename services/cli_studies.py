@@ -52,8 +52,16 @@ def _print_robots(item: dict[str, Any], robot: str | None) -> None:
     for col in ("robot", "source", "accepted", "why not"):
         t.add_column(col, overflow="fold")
     for r in fits:
-        t.add_row(r["robot"], r["source"], "yes" if r["accepted"] else "no", r["reason"] or "")
+        t.add_row(r["robot"], r["source"], "yes" if r["accepted"] else "no", why_not(r))
     console.print(t)
+
+
+def why_not(fit: dict[str, Any]) -> str:
+    """``field: reason`` of a refused robot × study (empty when accepted)."""
+    if fit.get("accepted"):
+        return ""
+    field = fit.get("field")
+    return f"{field}: {fit.get('reason') or ''}" if field else str(fit.get("reason") or "")
 
 
 @app.command("studies")
@@ -100,6 +108,6 @@ def studies(
         for it in items:
             for r in it["robots"]:
                 if robot in (r["robot"], r["id"]) and not r["accepted"]:
-                    console.print(f"{it['kind']}: {r['reason']}")
+                    console.print(f"{it['kind']}: {why_not(r)}")
     for name, err in data.get("plugin_errors", {}).items():
         console.print(f"[yellow]plug-in {name} not loaded: {err}[/yellow]")

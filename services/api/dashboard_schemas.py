@@ -281,12 +281,16 @@ class JointOut(BaseModel):
 
 
 class StudyFit(BaseModel):
-    """Whether a study kind accepts the robot, and why not."""
+    """Whether a study kind accepts the robot with its default task, and why not (what to
+    change: ``field``); when it does, the rules its default task was derived by."""
 
     kind: str
     title: str
     accepts: bool
+    field: str | None = None
     reason: str | None = None
+    rules: dict[str, str] = Field(default_factory=dict)
+    preset: str | None = None
 
 
 class RobotView(BaseModel):

@@ -3,8 +3,6 @@ of its filters, and a robot's joints, limits, masses and the study kinds that ac
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, HTTPException, Query
@@ -24,6 +22,7 @@ from services.api.deps import MAX_OFFSET, ApiContext, Context, CurrentKey
 from services.api.errors import invalid, not_found
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT, ErrorOut
 from services.api.spec_cache import build_robot_cached
+from services.api.study_fits import robot_fits
 from services.api.validation import summarize_robot
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
@@ -143,9 +142,6 @@ def dashboard_options(key: CurrentKey) -> DashboardOptions:
 
 # --------------------------------------------------------------------------- robots
 
-_FIT_CACHE: OrderedDict[str, list[StudyFit]] = OrderedDict()
-_FIT_LOCK = threading.Lock()
-
 
 def _finite(v: Any) -> float | None:
     f = float(v)
@@ -169,35 +165,15 @@ def _joints(robot: Robot, leg: str | None = None) -> list[JointOut]:
     ]
 
 
-def study_fits(cache_key: str, robot: Robot | LeggedRobot) -> list[StudyFit]:
-    """Each study kind, and whether it accepts ``robot`` with its default parameters (the
-    study's own checks: kind of robot, capabilities, reach), with the reason when not."""
-    from legcore.studies.registry import studies
-
-    with _FIT_LOCK:
-        if cache_key in _FIT_CACHE:
-            return _FIT_CACHE[cache_key]
-    kind = "legged" if isinstance(robot, LeggedRobot) else "serial"
-    fits = []
-    for name, study in sorted(studies().items()):
-        if kind not in study.robot_kinds:
-            need = f"needs a {' or '.join(study.robot_kinds)} robot"
-            fits.append(StudyFit(kind=name, title=study.title, accepts=False, reason=need))
-            continue
-        try:
-            study.build(robot, study.params(kind=name))
-        except (ValueError, KeyError, TypeError, ArithmeticError) as exc:
-            fits.append(StudyFit(kind=name, title=study.title, accepts=False, reason=str(exc)))
-            continue
-        fits.append(StudyFit(kind=name, title=study.title, accepts=True))
-    with _FIT_LOCK:
-        _FIT_CACHE[cache_key] = fits
-        while len(_FIT_CACHE) > 32:
-            _FIT_CACHE.popitem(last=False)
-    return fits
+def study_fits(robot: Robot | LeggedRobot) -> list[StudyFit]:
+    """Each study kind, and whether it accepts ``robot`` with its default task — the answer
+    ``POST /jobs`` gives (:mod:`services.api.study_fits`), with the reason when not."""
+    return [StudyFit(kind=f.kind, title=f.title, accepts=f.accepted, field=f.field,
+                     reason=f.reason, rules=f.rules, preset=f.preset)
+            for f in robot_fits(robot)]
 
 
-def _robot_view(ident: str, name: str, robot: Robot | LeggedRobot, cache_key: str) -> RobotView:
+def _robot_view(ident: str, name: str, robot: Robot | LeggedRobot) -> RobotView:
     s = summarize_robot(robot)
     if isinstance(robot, LeggedRobot):
         joints = [j for leg in robot.legs for j in _joints(leg.robot, leg.name)]
@@ -206,7 +182,7 @@ def _robot_view(ident: str, name: str, robot: Robot | LeggedRobot, cache_key: st
         joints, legs = _joints(robot), []
     return RobotView(
         id=ident, name=name, kind=s.kind, nq=s.nq, mass_kg=s.mass_kg, legs=legs,
-        joints=joints, studies=study_fits(cache_key, robot),
+        joints=joints, studies=study_fits(robot),
     )  # fmt: skip
 
 
@@ -222,7 +198,7 @@ async def dashboard_robot(robot_id: str, key: CurrentKey, ctx: Context) -> Robot
     it accepts the robot with its default parameters, and why not."""
     if robot_id in catalog.names():
         robot = catalog.get(robot_id)
-        return await run_in_threadpool(_robot_view, robot_id, robot_id, robot, f"c:{robot_id}")
+        return await run_in_threadpool(_robot_view, robot_id, robot_id, robot)
 
     def stored() -> RobotView:
         with ctx.read() as session:
@@ -237,6 +213,6 @@ async def dashboard_robot(robot_id: str, key: CurrentKey, ctx: Context) -> Robot
                 built = build_robot_cached(spec)
             except ValueError as exc:
                 raise HTTPException(409, f"robot {record.name!r} cannot be built: {exc}") from None
-        return _robot_view(record.id, record.name, built, f"r:{record.id}")
+        return _robot_view(record.id, record.name, built)
 
     return await run_in_threadpool(stored)

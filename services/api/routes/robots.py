@@ -24,6 +24,7 @@ from services.api.schemas import (
     RobotValidation,
 )
 from services.api.spec_cache import build_robot_cached
+from services.api.study_fits import StudyFitOut, robot_fits
 from services.api.validation import (
     RobotLookup,
     build_inline_robot,
@@ -70,9 +71,15 @@ class CapabilitiesOut(BaseModel):
 
 
 class RobotDetailOut(RobotDetail):
-    """A robot with its spec, the summary of its built model and its capabilities."""
+    """A robot with its spec, the summary of its built model and its capabilities; from
+    ``GET /robots/{id}`` also whether each study kind accepts it."""
 
     capabilities: CapabilitiesOut
+    studies: list[StudyFitOut] | None = Field(
+        default=None, description="Per study kind: accepted with its default task (and the rules "
+        "that task was derived by), or the field to change and why — the answer `POST /jobs` "
+        "gives. Listed by `GET /robots/{id}` (null in the answers of create)."
+    )
 
 
 class RobotValidationOut(RobotValidation):
@@ -229,14 +236,18 @@ def list_robots(
     responses=_404,
 )
 def get_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotDetailOut:
-    """Your robot ``robot_id``, or the catalog robot of that name, with its capabilities."""
+    """Your robot ``robot_id``, or the catalog robot of that name, with its capabilities and
+    whether each study kind accepts it with its default task (``studies``)."""
     if robot_id in catalog.names():
-        return _catalog_detail(robot_id)
+        out = _catalog_detail(robot_id)
+        return out.model_copy(update={"studies": robot_fits(catalog.get(robot_id))})
     with ctx.read() as session:
         record = repo.get_robot(session, robot_id, owner_key_id=key.id)
     if record is None:
         raise not_found("robot", robot_id)
-    return _detail(record)
+    spec = record.spec
+    robot = catalog.get(spec["catalog"]) if "catalog" in spec else build_robot_cached(spec)
+    return _detail(record, robot).model_copy(update={"studies": robot_fits(robot)})
 
 
 @router.get(

@@ -3,13 +3,13 @@
 For every kind (built-in or registered by a plug-in, see docs/plugins.md): its parameter JSON
 Schema and defaults (what ``problem`` of a job spec takes), the default robot, optimiser and
 budget, what it needs from a robot in words, and for each catalog robot and each of the
-caller's stored robots whether the study accepts it and, if not, why (the same message a job
-with that robot gets as a 422 at ``robot``).
+caller's stored robots whether the study accepts it with its default task and, if not, which
+field to change and why — the answer a job with that robot and the default task gets from
+``POST /jobs`` (one function: :mod:`services.api.study_fits`).
 """
 
 from __future__ import annotations
 
-import logging
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query
@@ -21,9 +21,8 @@ from legcore.studies.study import Study
 from services.api.deps import Context, CurrentKey
 from services.api.errors import invalid
 from services.api.spec_cache import build_robot_cached
+from services.api.study_fits import fit_of
 from services.store import repository as repo
-
-log = logging.getLogger("legopt.api")
 
 router = APIRouter(tags=["studies"])
 
@@ -32,14 +31,20 @@ MAX_STORED_ROBOTS = 100
 
 
 class RobotFit(BaseModel):
-    """Whether a study accepts one robot."""
+    """Whether a study accepts one robot with its default task (the answer ``POST /jobs``
+    gives: :mod:`services.api.study_fits`)."""
 
     robot: str = Field(description="Catalog name, or the stored robot's name.")
     id: str = Field(description="What a job spec's `robot` takes: the catalog name or the id.")
     source: Literal["catalog", "stored"]
     accepted: bool
+    field: str | None = Field(
+        default=None, description="What to change when refused: `robot` (a missing capability) "
+        "or the study parameter the pre-flight check names."
+    )
     reason: str | None = Field(
-        description="Why the study refuses the robot (naming the missing capability)."
+        description="Why the study refuses the robot (the missing capability, or why its default "
+        "task cannot work on it and what to give instead)."
     )
 
 
@@ -75,14 +80,10 @@ class StudiesOut(BaseModel):
 def _fit(study: Study, name: str, ident: str, source: str, robot: Any) -> RobotFit:
     if isinstance(robot, str):  # the robot could not be built
         return RobotFit(robot=name, id=ident, source=source, accepted=False,  # type: ignore[arg-type]
-                        reason=robot)
-    try:
-        reason = study.refusal(robot)
-    except Exception as exc:  # a plug-in's check failing must not fail the listing
-        log.warning("refusal check of %s failed: %r", study.kind, exc)
-        reason = f"{study.kind} could not check this robot: {type(exc).__name__}: {exc}"
+                        field="robot", reason=robot)
+    v = fit_of(robot, study.kind)
     return RobotFit(robot=name, id=ident, source=source,  # type: ignore[arg-type]
-                    accepted=reason is None, reason=reason)
+                    accepted=v.accepted, field=v.field, reason=v.reason)
 
 
 def _stored(spec: Any) -> Robot | LeggedRobot | str:

@@ -35,8 +35,18 @@ export async function render(main, robotId) {
         h("tbody", r.joints.map((j) => h("tr", r.legs.length ? h("td", j.leg) : null, h("td", j.name), h("td.num", num(j.lower)),
           h("td.num", num(j.upper)), h("td.num", num(j.velocity)), h("td.num", num(j.acceleration)), h("td.num", num(j.effort)), h("td.num", num(j.link_mass_kg))))))),
       h("div.card", h("h2", "Study kinds"), h("table#studies-table",
-        h("thead", h("tr", h("th", "study"), h("th", "accepts"), h("th", "why not"))),
+        h("thead", h("tr", h("th", "study"), h("th", "accepts"), h("th", "default task, or why not"))),
         h("tbody", r.studies.map((s) => h("tr", h("td", h("b", s.kind), h("div.muted", s.title)),
-          h("td", s.accepts ? h("span.badge.succeeded", "yes") : h("span.badge.failed", "no")), h("td", { style: "white-space:normal" }, s.reason || "")))))));
+          h("td", s.accepts ? h("span.badge.succeeded", "yes") : h("span.badge.failed", "no")),
+          h("td", { style: "white-space:normal" }, fitText(s))))))));
   }
+}
+
+/** What a study fit says: the rules its default task was derived by (or the paper's preset),
+ * or the field to change and why it is refused. */
+function fitText(s) {
+  if (!s.accepts) return `${s.field ? `${s.field}: ` : ""}${s.reason || ""}`;
+  if (s.preset) return `the paper's settings (${s.preset})`;
+  const rules = Object.entries(s.rules || {});
+  return rules.length ? rules.map(([k, v]) => `${k}: ${v}`).join("; ") : "its defaults";
 }
