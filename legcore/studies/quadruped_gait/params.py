@@ -11,12 +11,16 @@ from pydantic import Field, field_validator, model_validator
 from legcore.studies.quadruped_gait.cycle import SwingShape
 from legcore.studies.study import StudyParams
 
-__all__ = ["Pair", "Params"]
+__all__ = ["ROBOT_RELATIVE", "Pair", "Params"]
 
 Pair = tuple[float, float]
 #: One value per joint of a leg (2 or 3 joints).
 PerJoint = Annotated[tuple[float, ...], Field(min_length=2, max_length=3)]
 PerJointSign = Annotated[tuple[int, ...], Field(min_length=2, max_length=3)]
+
+#: The scalar and pair fields derived from the robot when left unset (None); ``q_ref`` too.
+ROBOT_RELATIVE = ("step_length", "step_height", "step_length_bounds", "step_height_bounds",
+                  "speed", "depth", "stroke_center", "stability_margin")
 
 
 def _finite(name: str, v: float) -> float:
@@ -26,43 +30,63 @@ def _finite(name: str, v: float) -> float:
 
 
 class Params(StudyParams):
-    """Parameters of the ``quadruped_gait`` study (SI units; every default is seed 003's value,
-    or ours for its robot where the paper has none — see the study's docstring).
+    """Parameters of the ``quadruped_gait`` study (SI units).
 
-    Default step (the ``default_step`` baseline, and what the optimum is compared with):
-    ``step_length`` s (m), ``step_height`` h (m), ``duty`` β. Search box: ``*_bounds``.
-    ``speed`` body speed v (m/s); ``depth`` foot depth below the hip in stance H (m);
-    ``stroke_center`` c (m, forward of the hip); ``swing_points`` optional user swing profile
-    ``[(ξ, η), …]`` (ξ from −0.5 at lift-off to 0.5 at touch-down, η ≥ 0 lift, 0 at both ends,
-    scaled so its peak is h); ``samples_per_cycle`` K (multiple of 4: the beats fall on the
-    grid); ``stability_margin`` required static margin (m); ``com_offset`` body COM from the
-    body centre (x, y) m; ``stance_load`` "body_weight" or "none"; ``energy_model``
-    "mechanical" (∫|τ q̇|) or "positive_work" (∫max(τ q̇, 0)); ``objective`` "energy_per_metre"
-    (J/m) or "energy_per_cycle" (J); ``servo_offset_deg`` / ``servo_direction`` per leg
-    (one servo per joint) override the robot's ``meta["servo"]``; ``table_positions`` number
-    of stroke positions of the Table 2-like output (the paper's 48; 2-joint closed-form legs
-    only) and ``compare_table2`` whether to print seed 003's Table 2 beside it.
+    **Robot-relative fields** (default None = derived from the robot by the rules of
+    :mod:`legcore.studies.quadruped_gait.defaults`, scaled to its leg length L; on seed 003's
+    ``animatronic_quadruped`` the paper's values of :mod:`~legcore.studies.quadruped_gait.preset`
+    instead): ``step_length`` s (m) and ``step_height`` h (m) of the default step (the
+    ``default_step`` baseline, what the optimum is compared with), their search boxes
+    ``step_length_bounds`` / ``step_height_bounds`` (m), ``speed`` body speed v (m/s), ``depth``
+    foot depth below the hip in stance H (m), ``stroke_center`` c (m, forward of the hip),
+    ``stability_margin`` required static margin (m), ``q_ref`` a reference (standing) posture per
+    leg (leg name → one angle per joint, rad; the IK takes the branch nearest it, then follows
+    the path; legs not named get the derived standing posture). A value given is used as given.
 
-    Any robot: ``q_ref`` a reference posture per leg (leg name → one angle per joint, rad; the
-    IK takes the branch nearest it, then follows the path; default each leg's home),
-    ``foot_lateral`` the feet's lateral distance from their hips (m, outward; default each
-    leg's own at ``q_ref``), ``ik`` "auto" (the 2-joint closed form where it applies, else
-    :func:`legcore.ik.solve`) or "numeric" (always the numerical solver).
+    Robot-independent: ``duty`` β of the default step and ``duty_bounds``;
+    ``swing_points`` optional user swing profile ``[(ξ, η), …]`` (ξ from −0.5 at lift-off to 0.5
+    at touch-down, η ≥ 0 lift, 0 at both ends, scaled so its peak is h); ``samples_per_cycle``
+    K (multiple of 4: the beats fall on the grid); ``com_offset`` body COM from the body centre
+    (x, y) m; ``stance_load`` "body_weight" or "none"; ``energy_model`` "mechanical" (∫|τ q̇|)
+    or "positive_work" (∫max(τ q̇, 0)); ``objective`` "energy_per_metre" (J/m) or
+    "energy_per_cycle" (J); ``servo_offset_deg`` / ``servo_direction`` per leg (one servo per
+    joint) override the robot's ``meta["servo"]``; ``table_positions`` number of stroke
+    positions of the Table 2-like output (the paper's 48; 2-joint closed-form legs only) and
+    ``compare_table2`` whether to print seed 003's Table 2 beside it; ``foot_lateral`` the
+    feet's lateral distance from their hips (m, outward; default each leg's own at its home
+    posture, or at the given ``q_ref``); ``ik`` "auto" (the 2-joint closed form where it
+    applies, else :func:`legcore.ik.solve`) or "numeric" (always the numerical solver).
     """
 
     kind: Literal["quadruped_gait"] = "quadruped_gait"
-    step_length: float = Field(default=0.119, gt=0.0, le=1.0)
-    step_height: float = Field(default=0.03, ge=0.0, le=1.0)
+    step_length: float | None = Field(
+        default=None, gt=0.0, le=10.0,
+        description="default step length s, m (None: 0.4 × leg length)")
+    step_height: float | None = Field(
+        default=None, ge=0.0, le=10.0,
+        description="default step height h, m (None: 0.1 × leg length)")
     duty: float = Field(default=0.8, gt=0.0, lt=1.0)
-    step_length_bounds: Pair = (0.04, 0.13)
-    step_height_bounds: Pair = (0.01, 0.05)
+    step_length_bounds: Pair | None = Field(
+        default=None, description="search box of s, m (None: 0.1–0.6 × leg length)")
+    step_height_bounds: Pair | None = Field(
+        default=None, description="search box of h, m (None: 0.05–0.2 × leg length)")
     duty_bounds: Pair = (0.75, 0.9)
-    speed: float = Field(default=0.03, gt=0.0, le=10.0)
-    depth: float = Field(default=0.1648, gt=0.0, le=10.0)
-    stroke_center: float = Field(default=-0.0012, ge=-10.0, le=10.0)
+    speed: float | None = Field(
+        default=None, gt=0.0, le=10.0,
+        description="body speed v, m/s (None: Froude number 0.01, v = 0.1·√(g·L), lowered "
+                    "until the default step's peak joint speed is half its limit)")
+    depth: float | None = Field(
+        default=None, gt=0.0, le=10.0,
+        description="foot depth below the hip in stance H, m (None: 0.75 × leg length)")
+    stroke_center: float | None = Field(
+        default=None, ge=-10.0, le=10.0,
+        description="stroke centre c forward of the hip, m (None: the whole robot's COM "
+                    "offset from the hips' centre at the standing posture)")
     swing_points: tuple[Pair, ...] | None = Field(default=None, max_length=1000)
     samples_per_cycle: int = Field(default=64, ge=16, le=4096)
-    stability_margin: float = Field(default=0.001, ge=-1.0, le=1.0)
+    stability_margin: float | None = Field(
+        default=None, ge=-1.0, le=1.0,
+        description="required static stability margin, m (None: 0.25 % of the leg length)")
     com_offset: Pair = (0.0, 0.0)
     stance_load: Literal["body_weight", "none"] = "body_weight"
     energy_model: Literal["mechanical", "positive_work"] = "mechanical"
@@ -71,7 +95,10 @@ class Params(StudyParams):
     servo_direction: dict[str, PerJointSign] | None = Field(default=None, max_length=8)
     table_positions: int = Field(default=48, ge=2, le=1000)
     compare_table2: bool = True
-    q_ref: dict[str, PerJoint] | None = Field(default=None, max_length=8)
+    q_ref: dict[str, PerJoint] | None = Field(
+        default=None, max_length=8,
+        description="reference posture per leg, rad (None: each leg's standing posture at the "
+                    "depth, knee toward the body centre where its limits allow)")
     foot_lateral: float | None = Field(default=None, ge=0.0, le=10.0)
     ik: Literal["auto", "numeric"] = "auto"
 
@@ -79,8 +106,8 @@ class Params(StudyParams):
         "step_length", "step_height", "duty", "speed", "depth", "stroke_center", "stability_margin"
     )
     @classmethod
-    def _finite_scalar(cls, v: float) -> float:
-        return _finite("value", v)
+    def _finite_scalar(cls, v: float | None) -> float | None:
+        return v if v is None else _finite("value", v)
 
     @field_validator("com_offset")
     @classmethod
@@ -133,12 +160,15 @@ class Params(StudyParams):
     @model_validator(mode="after")
     def _bounds(self) -> Params:
         limits = {
-            "step_length_bounds": (0.0, 1.0, False),
-            "step_height_bounds": (0.0, 1.0, True),
+            "step_length_bounds": (0.0, 10.0, False),
+            "step_height_bounds": (0.0, 10.0, True),
             "duty_bounds": (0.0, 1.0, False),
         }
         for name, (lo_min, hi_max, closed) in limits.items():
-            lo, hi = getattr(self, name)
+            pair = getattr(self, name)
+            if pair is None:
+                continue
+            lo, hi = pair
             if not (math.isfinite(lo) and math.isfinite(hi)):
                 raise ValueError(f"{name}: must be finite, got {(lo, hi)}")
             if lo > hi:
@@ -150,3 +180,12 @@ class Params(StudyParams):
                     f"{')' if name == 'duty_bounds' else ']'}, got {(lo, hi)}"
                 )
         return self
+
+    def need(self, name: str) -> Any:
+        """The value of the robot-relative field ``name``, which must have been derived
+        (:mod:`legcore.studies.quadruped_gait.defaults`); ``ValueError`` naming it if None."""
+        value = getattr(self, name)
+        if value is None:
+            raise ValueError(f"{name}: not set; it is derived from the robot by "
+                             "STUDY.task / STUDY.build (legcore.studies.quadruped_gait.defaults)")
+        return value

@@ -4,9 +4,11 @@ that walks with the least energy under a static stability margin.
 Any quadruped with 2- or 3-joint legs, one at each corner of the body (the catalog's
 ``animatronic_quadruped`` of seed 003; Solo12, ANYmal, Go1 … from their URDF): the legs come
 from the robot (:mod:`legcore.studies.quadruped_gait.legs`), their corner from the hip
-position. Every default is seed 003's value or, where the paper has none, ours for its robot
-(:mod:`legcore.studies.quadruped_gait.params`); a preset for another robot sets its own depth,
-stroke and reference posture (``examples/``).
+position. The gait is the robot's: depth, standing posture, stroke centre, step, speed and
+margin are derived from its leg length by the rules of
+:mod:`legcore.studies.quadruped_gait.defaults` (checked before a job is queued), except on seed
+003's own robot, where its paper's values fill them (:mod:`.preset`); a value given is used as
+given (``examples/presets/`` for Solo12, ANYmal, Go1).
 
 Source: seed 003 (Pailos, Bima, Libal 2017): 2-DOF legs (front elbow back, rear knee forward),
 law-of-cosines IK (eqs 5–9), the gait of its Fig. 8 / text ("the four legs out of phase by
@@ -41,7 +43,10 @@ Model (SI units; body frame x forward, y left, z up; leg frame x down, y forward
   plus leg links) in the support polygon of the stance feet, over the cycle grid and just
   before/after every lift-off and touch-down; (1) reach: fraction of samples whose foot target
   is out of reach, outside the joint limits or singular (straight leg); (2) joint speed:
-  ``max |q̇| / q̇_max − 1``; (3) torque: ``max |τ| / τ_max − 1`` (servo stall torque).
+  ``max |q̇| / q̇_max − 1``; (3) torque: ``max |τ| / τ_max − 1`` (servo stall torque); (4) no
+  foot pulls on the ground: the largest downward force a stance foot would need, as a share
+  of the robot's weight (≤ 1e-9). :meth:`QuadrupedGaitProblem.violations` says each in words
+  with its size (:mod:`.feasibility`).
 * **Decision** ``x = (s, h, β)``: step length (m), step height (m), duty factor, within
   ``*_bounds`` (equal bounds fix a variable).
 
@@ -53,10 +58,10 @@ the ``servo_table`` (one row per time step, one column per servo, with the servo
 ``table2`` (the stance stroke in the paper's 48 positions and columns) and ``table2_paper`` (the
 printed rows beside ours, ``compare_table2``).
 
-Seed data and our choices (docs/studies.md (seed 003)): depth H = 0.1648 m, stroke
-centre c = −1.2 mm and the default step length 0.119 m come from Table 2's first and last
-printed positions (the paper's 48-position stroke); the paper gives no timing, step height or
-body speed: v = 0.03 m/s, h = 0.03 m and β = 0.8 are ours.
+Seed data and our choices (docs/studies.md (seed 003); :mod:`.preset`): depth H = 0.1648 m,
+stroke centre c = −1.2 mm and the default step length 0.119 m come from Table 2's first and
+last printed positions (the paper's 48-position stroke); the paper gives no timing, step height
+or body speed: v = 0.03 m/s, h = 0.03 m and β = 0.8 are ours.
 """
 
 from __future__ import annotations
@@ -80,15 +85,18 @@ from legcore.studies.quadruped_gait.cycle import (
     load_share,
     stance_loads,
 )
+from legcore.studies.quadruped_gait.defaults import derive
+from legcore.studies.quadruped_gait.feasibility import step_report
 from legcore.studies.quadruped_gait.legs import GaitLeg, gait_legs
-from legcore.studies.quadruped_gait.params import Params
+from legcore.studies.quadruped_gait.params import ROBOT_RELATIVE, Params
+from legcore.studies.quadruped_gait.preset import PRESET
 from legcore.studies.quadruped_gait.tables import (
     servo_mapping,
     servo_table,
     table2,
     table2_comparison,
 )
-from legcore.studies.study import Motion, Solution, Study, StudyProblem
+from legcore.studies.study import Motion, Solution, Study, StudyProblem, Violation
 
 __all__ = ["Params", "QuadrupedGaitProblem", "STUDY", "TABLE2_PAPER", "UNREACHABLE_F", "build"]
 
@@ -97,6 +105,8 @@ FloatArray = NDArray[np.float64]
 #: Objective value of a step whose feet cannot follow the path (finite, so that optimisers and
 #: fronts stay numeric; the reach constraint marks the row infeasible).
 UNREACHABLE_F = 1.0e6
+#: Rounding allowance of the no-pull constraint (fraction of the robot's weight).
+_PULL_TOL = 1e-9
 _EVENT_EPS = 1e-7  # phase offset of the margin samples just before/after a lift-off/touch-down
 
 #: Seed 003 Table 2 as printed: position, front (Ang3, Ang4, q3DA, q4DA), rear (Ang3, Ang4,
@@ -108,7 +118,8 @@ class QuadrupedGaitProblem(StudyProblem):
     """Energy of the 4-beat walk per metre (or per cycle) over ``x = (s, h, β)``; see the module
     docstring for the model and the constraint columns."""
 
-    constraint_names = ("stability_margin_mm", "unreachable_fraction", "joint_speed", "torque")
+    constraint_names = ("stability_margin_mm", "unreachable_fraction", "joint_speed", "torque",
+                        "foot_pull")
 
     def __init__(self, robot: LeggedRobot, params: Params) -> None:
         self.robot = robot
@@ -133,12 +144,19 @@ class QuadrupedGaitProblem(StudyProblem):
         self.objective_names = (params.objective,)
         self.n_samples = (params.samples_per_cycle + 1) * len(self.legs)
         p = params
+        #: the robot-relative values (derived by STUDY.task when not given)
+        self.speed = float(p.need("speed"))
+        self.depth = float(p.need("depth"))
+        self.stroke_center = float(p.need("stroke_center"))
+        self.required_margin = float(p.need("stability_margin"))
+        self.default_x = np.array([p.need("step_length"), p.need("step_height"), p.duty])
+        sl, sh = p.need("step_length_bounds"), p.need("step_height_bounds")
         super().__init__(
             3,
             1,
-            4,
-            xl=[p.step_length_bounds[0], p.step_height_bounds[0], p.duty_bounds[0]],
-            xu=[p.step_length_bounds[1], p.step_height_bounds[1], p.duty_bounds[1]],
+            5,
+            xl=[sl[0], sh[0], p.duty_bounds[0]],
+            xu=[sl[1], sh[1], p.duty_bounds[1]],
             name="quadruped_gait",
         )
 
@@ -157,7 +175,7 @@ class QuadrupedGaitProblem(StudyProblem):
         X = np.asarray(X, dtype=float)
         B = X.shape[0]
         s, h, beta = X[:, 0:1], X[:, 1:2], X[:, 2:3]
-        T = s / (beta * p.speed)  # (B, 1)
+        T = s / (beta * self.speed)  # (B, 1)
         # Phase grid: one closed cycle, then (for the margin only) both sides of every event.
         grid = np.broadcast_to(np.arange(K + 1) / K, (B, K + 1))
         events = np.concatenate((self.offsets[None, :] + 0 * beta, self.offsets + (1.0 - beta)), -1)
@@ -171,7 +189,7 @@ class QuadrupedGaitProblem(StudyProblem):
         for j, g in enumerate(self.gait_legs):
             leg, rb = g.leg, g.leg.robot
             pos, dpos, ddpos, st = foot_cycle(
-                u[..., j], s, h, beta, p.depth, p.stroke_center, self.shape
+                u[..., j], s, h, beta, self.depth, self.stroke_center, self.shape
             )
             qk, qd, qdd, ok_k = g.motion(pos[:, : K + 1], dpos[:, : K + 1], ddpos[:, : K + 1],
                                          T, self.numeric)
@@ -239,6 +257,7 @@ class QuadrupedGaitProblem(StudyProblem):
             "bad": bad,
             "qd_ratio": qd_ratio,
             "tau_ratio": tau_ratio,
+            "pull": np.max(-loads, axis=(-2, -1)) / (self.mass * self.g),
         }
         if detail:
             out.update(
@@ -263,10 +282,11 @@ class QuadrupedGaitProblem(StudyProblem):
         f = np.where((r["bad"] > 0) | ~np.isfinite(f), UNREACHABLE_F, f)
         G = np.stack(
             (
-                (p.stability_margin - r["margin"]) * 1e3,
+                (self.required_margin - r["margin"]) * 1e3,
                 r["bad"],
                 r["qd_ratio"] - 1.0,
                 r["tau_ratio"] - 1.0,
+                r["pull"] - _PULL_TOL,
             ),
             -1,
         )
@@ -275,6 +295,12 @@ class QuadrupedGaitProblem(StudyProblem):
 
     def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return self._objective_constraints(self.simulate(X))
+
+    def violations(self, x: FloatArray) -> tuple[Violation, ...]:
+        """What step ``x`` violates, in words with sizes and units (margin in mm, the joint
+        over its speed or torque limit, the share out of reach, a foot pulling on the ground:
+        :mod:`~legcore.studies.quadruped_gait.feasibility`)."""
+        return step_report(self, x).violations()
 
     # ------------------------------------------------------------------ decoding
     def solution(self, x: FloatArray) -> Solution:
@@ -291,8 +317,8 @@ class QuadrupedGaitProblem(StudyProblem):
         power = tau * qd
         absp = np.maximum(power, 0.0) if p.energy_model == "positive_work" else np.abs(power)
         cum = np.concatenate(([0.0], np.cumsum(0.5 * (absp[1:] + absp[:-1]).sum(-1) * np.diff(t))))
-        x_body = p.speed * t  # body displacement (m) along world x
-        body_h = p.depth - float(np.mean([leg.hip[2, 3] for leg in self.legs]))
+        x_body = self.speed * t  # body displacement (m) along world x
+        body_h = self.depth - float(np.mean([leg.hip[2, 3] for leg in self.legs]))
         body = np.stack((x_body, np.zeros_like(t), np.full_like(t, body_h)), -1)
         feet_w = d["feet"] + body[:, None, :]
         com_w = d["com"] + body
@@ -316,14 +342,14 @@ class QuadrupedGaitProblem(StudyProblem):
             "energy_stance_J": E - e_swing,
             "cycle_time_s": float(d["T"]),
             "distance_per_cycle_m": D,
-            "speed_m_s": p.speed,
+            "speed_m_s": self.speed,
             "step_length_m": float(x[0]),
             "step_height_m": float(x[1]),
             "duty": float(x[2]),
             "min_stability_margin_m": float(d["margin"]),
             # no foot on the ground at some sample: the margin is -inf, stored as null + this flag
             "airborne": float(not np.isfinite(d["margin"])),
-            "required_stability_margin_m": p.stability_margin,
+            "required_stability_margin_m": self.required_margin,
             "max_joint_speed_ratio": float(d["qd_ratio"]),
             "max_torque_ratio": float(d["tau_ratio"]),
             "max_torque_Nm": float(np.max(np.abs(tau))),
@@ -423,10 +449,9 @@ class QuadrupedGaitProblem(StudyProblem):
         return table2_comparison(self.gait_legs, self.servo, self.params, TABLE2_PAPER)
 
     def baseline_solutions(self) -> dict[str, Solution]:
-        p = self.params
         out = {
-            "default_step": self.solution(np.array([p.step_length, p.step_height, p.duty])),
-            "paper_walk": self.solution(np.array([p.step_length, p.step_height, 0.75])),
+            "default_step": self.solution(self.default_x),
+            "paper_walk": self.solution(np.array([*self.default_x[:2], 0.75])),
         }
         return out
 
@@ -465,9 +490,13 @@ def _joint_names(rb: Any) -> tuple[str, ...]:
 
 
 def build(robot: Any, params: Params) -> QuadrupedGaitProblem:
-    """The study's problem for ``robot`` (a quadruped :class:`LeggedRobot`) and ``params``."""
+    """The study's problem for ``robot`` (a quadruped :class:`LeggedRobot`) and ``params``;
+    robot-relative fields left unset are first made concrete by :meth:`Study.task` (the
+    paper's preset on its robot, else the rules of :mod:`.defaults`, with the pre-flight)."""
     if not isinstance(params, Params):
         params = Params.model_validate(params)
+    if any(getattr(params, f) is None for f in ROBOT_RELATIVE):
+        params = STUDY.task(robot, params).params
     return QuadrupedGaitProblem(robot, params)
 
 
@@ -492,6 +521,8 @@ STUDY = Study(
     default_generations=40,
     build=build,
     robot_kinds=("legged",),
+    derive=derive,
+    preset=PRESET,
     needs=(Needs(legged=True, n_legs=(4,), leg_joints=(2, 3), revolute=True),),
     description=(
         "A quadruped (four legs of 2-3 joints, one at each corner) walks the 4-beat walk; "

@@ -134,8 +134,9 @@ def table2(
     if pair is None:
         return None
     n = positions or params.table_positions
-    y = params.stroke_center + 0.5 * s - s * np.linspace(0.0, 1.0, n)
-    P = np.stack((np.full(n, params.depth), y), -1)
+    depth, center = float(params.need("depth")), float(params.need("stroke_center"))
+    y = center + 0.5 * s - s * np.linspace(0.0, 1.0, n)
+    P = np.stack((np.full(n, depth), y), -1)
     cols: list[FloatArray] = []
     names = {}
     for role, g in zip(("FR", "RR"), pair, strict=True):
@@ -149,8 +150,7 @@ def table2(
     rows = [[k + 1, *(None if not np.isfinite(v) else round(float(v), 2) for v in A[k])]
             for k in range(n)]
     return {"legs": names, "columns": list(TABLE2_COLUMNS), "rows": rows,
-            "stroke": {"step_length_m": s, "depth_m": params.depth,
-                       "center_m": params.stroke_center}}
+            "stroke": {"step_length_m": s, "depth_m": depth, "center_m": center}}
 
 
 def table2_comparison(
@@ -160,7 +160,7 @@ def table2_comparison(
     """Seed 003's printed Table 2 rows (``printed``: position, front and rear columns) beside
     ours at the same stroke positions (default step length), with the differences (deg) and
     the foot depth of the printed rows. None unless :func:`table2` applies."""
-    ours_t = table2(legs, mapping, params, params.step_length, 48)
+    ours_t = table2(legs, mapping, params, float(params.need("step_length")), 48)
     pair = _front_rear(legs)
     if ours_t is None or pair is None:
         return None

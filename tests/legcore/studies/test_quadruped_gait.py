@@ -25,6 +25,7 @@ from legcore.studies.quadruped_gait.problem import (
     TABLE2_PAPER,
     UNREACHABLE_F,
     Params,
+    QuadrupedGaitProblem,
     build,
 )
 from legcore.studies.registry import get_study
@@ -52,13 +53,20 @@ def test_study_registered_with_seed_settings():
     assert study is STUDY
     assert study.seed_paper == "003" and study.default_robot == "animatronic_quadruped"
     assert study.robot_kinds == ("legged",)
-    p = Params()
+    # seed 003's values live in its preset, which fills the defaults on its own robot
+    assert Params().step_length is None and Params().depth is None
+    task = STUDY.task(ROBOT, Params())
+    p = task.params
     assert (p.step_length, p.depth, p.stroke_center, p.table_positions) == (
         0.119,
         0.1648,
         -0.0012,
         48,
     )
+    assert (p.step_height, p.speed, p.stability_margin, p.duty) == (0.03, 0.03, 0.001, 0.8)
+    assert (p.step_length_bounds, p.step_height_bounds) == ((0.04, 0.13), (0.01, 0.05))
+    assert task.preset is not None and task.preset.startswith("seed 003")
+    assert build(ROBOT, Params()).params == p
     spec = parse_job_spec({"problem": {"kind": "quadruped_gait", "duty": 0.85}, "seed": 3})
     assert spec.problem.duty == 0.85
 
@@ -278,7 +286,13 @@ def test_foot_cycle_is_c2_across_lift_off_and_touch_down(shape):
 
 
 def test_unreachable_step_is_reported_not_crashed():
-    prob = build(ROBOT, Params(depth=0.18))  # deeper than l1 + l2 = 0.1775 m
+    # deeper than l1 + l2 = 0.1775 m: refused at submission, naming the field and the range
+    with pytest.raises(ValueError, match=r"^depth: leg FL cannot stand .* to 0\.1775 m "
+                                         r"\(stretched\)"):
+        STUDY.build(ROBOT, Params(depth=0.18))
+    # built without the pre-flight, the problem reports it instead of crashing
+    params = STUDY.task(ROBOT, Params()).params.model_copy(update={"depth": 0.18})
+    prob = QuadrupedGaitProblem(ROBOT, params)
     F, G = prob.evaluate(np.array([DEFAULT_X, NEAR_OPT_X]))
     # the stance stroke is out of reach, the lifted part of the swing is not
     assert np.all(F == UNREACHABLE_F) and np.all(G[:, 1] > 0.9)
@@ -421,3 +435,28 @@ def test_legs_by_corner_and_clear_errors():
     with pytest.raises(ValueError, match="^robot: quadruped_gait needs 4 legs of 2–3 joints; "
                                          "robot citedi_hexapod has 6 legs"):
         get_study("quadruped_gait").build(catalog.get("citedi_hexapod"), Params())
+
+
+# ------------------------------------------------------------------------------- violations
+def test_violations_say_what_is_violated_with_size_and_unit(problem):
+    """The margin in mm, the joint over its speed or torque limit with its peak and limit, a
+    foot pulling on the ground in N — each the size of its column of G."""
+    assert problem.violations(DEFAULT_X) == ()  # the seed's default step is feasible
+    (margin,) = problem.violations(PAPER_WALK_X)
+    _, G = problem.evaluate(PAPER_WALK_X[None])
+    assert margin.constraint == "stability_margin_mm" and margin.unit == "mm"
+    assert margin.amount == pytest.approx(G[0, 0]) and 1.0 < margin.amount < 2.0
+    assert margin.text == (f"static stability margin {1.0 - margin.amount:.3g} mm, "
+                           f"{margin.amount:.3g} mm short of the required 1 mm")
+    fast = build(ROBOT, Params(speed=0.2))  # 6.7 × the seed's speed
+    speed, torque = fast.violations(DEFAULT_X)
+    qd = fast.solution(DEFAULT_X).motion.qd
+    j = int(np.argmax(np.abs(qd).max(axis=0) / 5.0))  # the servos' 5 rad/s
+    assert speed.constraint == "joint_speed" and speed.text.startswith(
+        f"joint {fast.joint_names[j]} at {np.abs(qd).max() / 5.0:.0%} of its speed limit 5 rad/s")
+    assert torque.constraint == "torque" and "of its torque limit 0.1177 N·m" in torque.text
+    heavy_front = build(ROBOT, Params(com_offset=(0.03, 0.0)))  # body COM 3 cm ahead
+    margin, pull = heavy_front.violations(DEFAULT_X)
+    loads = heavy_front.solution(DEFAULT_X).motion.scene["foot_loads_N"]
+    assert margin.amount > 10.0 and pull.constraint == "foot_pull" and pull.unit == "N"
+    assert pull.amount == pytest.approx(-loads.min()) and "pulls on the ground" in pull.text
