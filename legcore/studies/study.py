@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, ValidationError
 
 from legcore.problems.base import Problem
 from legcore.robots.capabilities import Needs, capabilities, refusal
-from legcore.studies.task import Fit, Preset, Task, Violation, fill
+from legcore.studies.task import Fit, Preset, Task, Violation, fill, validation_message
 
 __all__ = ["Box", "Fit", "Motion", "Solution", "Study", "StudyParams", "StudyProblem", "Task",
            "Violation"]
@@ -273,11 +273,14 @@ class Study:
         robot-relative rest and runs the pre-flight check (``ValueError`` naming the field)."""
         preset = None
         if self.preset is not None and self.preset.applies(robot):
-            params = fill(params, self.preset.params)
+            params = fill(params, self.preset.values(params))
             preset = self.preset.source
         if self.derive is None:
             return Task(params, {}, preset)
-        task = self.derive(robot, params)
+        try:
+            task = self.derive(robot, params)
+        except ValidationError as exc:  # a derived value the params model refuses
+            raise ValueError(validation_message(exc)) from None
         return Task(task.params, task.rules, preset) if preset is not None else task
 
     def refusal(self, robot: Any) -> str | None:

@@ -26,11 +26,13 @@ solution with its size (``StudyProblem.violations``).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["Fit", "Preset", "Task", "Violation", "fill"]
+from pydantic import ValidationError
+
+__all__ = ["Fit", "Preset", "Task", "Violation", "fill", "validation_message"]
 
 
 @dataclass(frozen=True)
@@ -58,12 +60,22 @@ class Preset:
     ``robot``: the catalog name of the paper's robot; ``params``: the study parameters the
     paper used (JSON-able values, validated by the study's ``Params``); ``source``: the paper
     and table. It applies to a robot whose model equals the catalog robot's (same name and same
-    spec, so an edited copy of the robot gets robot-relative defaults instead).
+    spec, so an edited copy of the robot gets robot-relative defaults instead). ``cases``:
+    the paper's values that depend on what the user gave (``cases(params) -> {field: value}``,
+    e.g. a second case's end posture when there is an obstacle, or a value left out when the
+    user gave another field that excludes it); :meth:`values` merges them over ``params``.
     """
 
     robot: str
     params: Mapping[str, Any]
     source: str
+    cases: Callable[[Any], Mapping[str, Any]] | None = None
+
+    def values(self, params: Any) -> Mapping[str, Any]:
+        """The values this preset fills into ``params`` (its unset fields only, :func:`fill`)."""
+        if self.cases is None:
+            return self.params
+        return {**self.params, **self.cases(params)}
 
     def applies(self, robot: Any) -> bool:
         """True when ``robot`` is this preset's catalog robot (same name and same model)."""
@@ -80,12 +92,27 @@ class Preset:
 
 def fill(params: Any, values: Mapping[str, Any]) -> Any:
     """``params`` with the fields the user left unset taken from ``values`` (validated by the
-    params model; the filled fields then count as set)."""
+    params model; the filled fields then count as set). A combination the model refuses (a
+    preset's value beside a given one) is ``ValueError("<field>: …")``."""
     given = params.model_dump(exclude_unset=True)
     missing = {k: v for k, v in values.items() if k not in params.model_fields_set}
     if not missing:
         return params
-    return type(params).model_validate({**missing, **given})
+    try:
+        return type(params).model_validate({**missing, **given})
+    except ValidationError as exc:
+        raise ValueError(validation_message(exc)) from None
+
+
+def validation_message(exc: ValidationError) -> str:
+    """``"<field>: <why>"`` of a pydantic error of a study's ``Params`` (the first one)."""
+    err = exc.errors()[0]
+    msg = str(err.get("msg", exc)).removeprefix("Value error, ")
+    head = msg.split(" ", 1)[0]
+    if head.endswith(":") and len(head) > 1:  # already "<field>: …"
+        return msg
+    loc = ".".join(str(p) for p in err.get("loc", ()))
+    return f"{loc}: {msg}" if loc else msg
 
 
 @dataclass(frozen=True)

@@ -170,10 +170,20 @@ def check_gait(robot: LeggedRobot, sol: Solution) -> None:
 def check_hexapod(problem: Any, sol: Solution) -> bool:
     """``hexapod_workspace``: when the motion keeps the feet fixed, each stance foot (Pinocchio
     FK of its leg, at its hip on the moving body; study frame: forward is +y) stays where it
-    started (1e-6 m), and the body ends at the reported pose. Returns whether it was checked
+    started (1e-6 m), and the body ends at the reported pose. A solution that claims to be
+    stable has its body pose inside the support triangle of the fixed feet (signed distance to
+    each edge, by cross products, ≥ −the feet's slip). Returns whether the feet were checked
     (a motion that falls back to the paper's, feet not fixed, says so and is not)."""
     mo = sol.motion
     assert mo is not None
+    if sol.metrics.get("stable") == 1.0 and "body_pose" in sol.extra:
+        P = np.asarray(problem.feet_start, dtype=float)[:, :2]
+        c = np.asarray(sol.extra["body_pose"][:2], dtype=float)
+        e = np.roll(P, -1, axis=0) - P                       # edges 0→1, 1→2, 2→0
+        w = c - P
+        area2 = e[0, 0] * (P[2, 1] - P[0, 1]) - e[0, 1] * (P[2, 0] - P[0, 0])
+        dist = np.sign(area2) * (e[:, 0] * w[:, 1] - e[:, 1] * w[:, 0]) / np.linalg.norm(e, axis=1)
+        assert dist.min() >= -sol.metrics["foot_slip_max"] - 1e-12, (dist, sol.metrics)
     if sol.metrics["motion_feet_fixed"] != 1.0:
         return False
     robot, tripod = problem.robot, problem.tripod

@@ -7,7 +7,11 @@ Any hexapod with 3-joint legs, three on each side of the walking axis: the catal
 URDF, or a parametric one (``hexapod``: leg lengths and hip layout,
 :mod:`legcore.studies.hexapod_workspace.robot`). Legs, tripods and the study frame (walking
 along +y) come from :mod:`legcore.studies.hexapod_workspace.legs`; seed 002's legs use the
-closed forms of its eqs (5)–(10), other legs the numerical FK/IK. Every default is seed 002's.
+closed forms of its eqs (5)–(10), other legs the numerical FK/IK. The robot-relative defaults
+(stance posture, θ1 bounds, pose grid, hypervolume reference) are derived from the robot
+(:mod:`~legcore.studies.hexapod_workspace.defaults`); seed 002's values are its preset on
+``citedi_hexapod`` (:mod:`~legcore.studies.hexapod_workspace.preset`), which the description
+below quotes.
 
 Problem (eq 11). The tripod 1-3-5 stands on the ground with θ1 = 0, θ2 = −π/8, θ3 = −π/4 on
 every stance leg (stance ``t``). The decision is the new coxa angles ``x = (θ1,1, θ1,3, θ1,5)``
@@ -26,9 +30,15 @@ for the whole population in one vectorised call.
 Stability (Fig. 6): the body centre must stay inside the support triangle, i.e. the distances
 S_f, S_b along x to the front and back diagonals must be positive. The paper applies it *after*
 the optimisation — its Fig. 9b shows a Pareto-optimal solution "inside the workspace that is not
-viable" — so by default (``stability="classify"``) it is a post-hoc classification of the front
-(the split is in the study extras); ``stability="constraint"`` makes it two constraints
-``G = −(S_f, S_b) ≤ 0`` instead.
+viable" — so its preset (``stability="classify"``) makes it a post-hoc classification of the
+front (the split is in the study extras); the default elsewhere, ``stability="constraint"``,
+makes it two constraints ``G = −(S_f, S_b) ≤ 0``: a stance the robot cannot hold is no answer.
+
+**Feasible** means statically stable (S_f > 0 and S_b > 0 at t+1), in either mode:
+:meth:`HexapodWorkspaceProblem.violations` reports an unstable solution (its S_f/S_b below 0,
+in m), so a run whose optimum is unstable — possible with ``classify`` — says
+``feasible: false``. The triangle errors f1–f3 (the feet's slip) are objectives, not
+constraints: a near-congruent solution is the answer, its slip is reported.
 
 Outputs (``extras``): the front with each point's body displacement (a planar rigid fit of the
 new triangle onto the fixed feet), stability and foot slip; the stable/unstable split; the
@@ -55,6 +65,7 @@ from numpy.typing import NDArray
 from legcore.gaits import stability_margin, support_triangle, tripod_feet, tripod_stability
 from legcore.metrics import hypervolume
 from legcore.robots.capabilities import Needs
+from legcore.studies.hexapod_workspace.defaults import HexapodStudy, derive, study_robot
 from legcore.studies.hexapod_workspace.geometry import (
     OTHER_STANCE,
     Tripod,
@@ -68,8 +79,9 @@ from legcore.studies.hexapod_workspace.geometry import (
 )
 from legcore.studies.hexapod_workspace.legs import STANCE_ROLES, leg_roles
 from legcore.studies.hexapod_workspace.params import HV_REF, Params
-from legcore.studies.hexapod_workspace.robot import parametric_hexapod
-from legcore.studies.study import Motion, Solution, Study, StudyProblem
+from legcore.studies.hexapod_workspace.preset import PRESET
+from legcore.studies.study import Motion, Solution, StudyProblem
+from legcore.studies.task import Violation
 from legcore.trajectories.profiles import QuinticProfile
 
 __all__ = ["HV_REF", "PAPER_TABLE2", "HexapodWorkspaceProblem", "Params", "STUDY", "build"]
@@ -98,14 +110,13 @@ class HexapodWorkspaceProblem(StudyProblem):
 
     def __init__(self, robot: Any, params: Params) -> None:
         self.params = params
-        if params.hexapod is not None:
-            robot = parametric_hexapod(params.hexapod)
+        robot = study_robot(robot, params)
         self.robot = robot
         self.tripod: Tripod = tripod_from_robot(robot, params.stance)
         roles = leg_roles(robot)
         self.stance_legs = {k: tuple(roles[r] for r in v) for k, v in STANCE_ROLES.items()}
         self.theta_start = np.asarray(params.theta1_start, dtype=float)
-        self.theta2, self.theta3 = float(params.theta2), float(params.theta3)
+        self.theta2, self.theta3 = params.value("theta2"), params.value("theta3")
         self.q_stance = np.column_stack((self.theta_start, np.full(3, self.theta2),
                                          np.full(3, self.theta3)))  # (3 legs, 3 joints)
         self._check_limits(params)
@@ -116,7 +127,9 @@ class HexapodWorkspaceProblem(StudyProblem):
         self.S_start = S
         self.symmetry = is_mirror_symmetric(robot)
         n_constr = 2 if params.stability == "constraint" else 0
-        super().__init__(3, 3, n_constr, xl=params.theta1_min, xu=params.theta1_max,
+        self.constraint_names = ("S_f", "S_b")[:n_constr]
+        super().__init__(3, 3, n_constr, xl=params.value("theta1_min"),
+                         xu=params.value("theta1_max"),
                          name=f"hexapod_workspace[{'-'.join(self.tripod.legs)}]")
 
     # ------------------------------------------------------------------ set-up checks
@@ -124,9 +137,10 @@ class HexapodWorkspaceProblem(StudyProblem):
         t = self.tripod
         for k, leg in enumerate(t.legs):
             lo, hi = t.q_min[k], t.q_max[k]
-            if params.theta1_min < lo[0] - 1e-9 or params.theta1_max > hi[0] + 1e-9:
+            t_lo, t_hi = params.value("theta1_min"), params.value("theta1_max")
+            if t_lo < lo[0] - 1e-9 or t_hi > hi[0] + 1e-9:
                 raise ValueError(
-                    f"problem.theta1_min: [{params.theta1_min:.4f}, {params.theta1_max:.4f}] rad "
+                    f"problem.theta1_min: [{t_lo:.4f}, {t_hi:.4f}] rad "
                     f"exceeds the coxa limits [{lo[0]:.4f}, {hi[0]:.4f}] of leg {leg}")
             for name, j, v in (("theta1_start", 0, self.theta_start[k]),
                                ("theta2", 1, self.theta2), ("theta3", 2, self.theta3)):
@@ -173,6 +187,26 @@ class HexapodWorkspaceProblem(StudyProblem):
         if self.n_constr == 0:
             return F, None
         return F, -np.clip(S, -1.0, 1.0)
+
+    def violations(self, x: FloatArray) -> tuple[Violation, ...]:
+        """What makes ``x`` infeasible: the body centre outside the support triangle at t+1
+        (S_f ≤ 0 or S_b ≤ 0, m), whatever ``stability`` says — with ``classify`` the optimiser
+        does not enforce it, but the answer still says so. The amount is how far the centre is
+        past that diagonal along x (m; the perpendicular distance when the diagonal is parallel
+        to x)."""
+        x = np.asarray(x, dtype=float).reshape(1, 3)
+        _, S, feet = self.objectives(x)
+        margin = float(stability_margin(feet[0]))
+        out = []
+        for name, s, diagonal in (("S_f", float(S[0, 0]), "front"),
+                                  ("S_b", float(S[0, 1]), "back")):
+            if s > 0.0:
+                continue
+            amount = -s if math.isfinite(s) else max(-margin, 0.0)
+            out.append(Violation(name, amount, "m",
+                                 f"body centre {amount:.3g} m outside the support triangle's "
+                                 f"{diagonal} diagonal: statically unstable"))
+        return tuple(out)
 
     def body_motion(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Body displacement ``(x, y, yaw)`` (B, 3) that best keeps the feet fixed, and the foot
@@ -390,7 +424,7 @@ class HexapodWorkspaceProblem(StudyProblem):
                 "unstable_index": np.flatnonzero(~stable).tolist(),
             }
             out["workspace"] = self.mirrored_workspace(X, rep)
-            ref = np.asarray(p.hv_ref_point, dtype=float)
+            ref = np.asarray(p.hv_ref(), dtype=float)
             hv = hypervolume(np.asarray(front_F, dtype=float).reshape(-1, 3), ref)
             out["hypervolume"] = {"value": hv.value, "ref_point": list(hv.ref_point),
                                   "normalised": hv.value / float(np.prod(ref)),
@@ -451,13 +485,17 @@ def _json_list(a: FloatArray) -> Any:
 
 def build(robot: Any, params: Params) -> HexapodWorkspaceProblem:
     """The study problem for ``robot`` (a hexapod with 3-joint legs, or the parametric one of
-    ``params.hexapod``) and ``params``."""
+    ``params.hexapod``) and ``params``; robot-relative fields left unset are first derived
+    (``STUDY.task``: the paper's preset on its robot, else the rules of
+    :mod:`~legcore.studies.hexapod_workspace.defaults`, with the pre-flight check)."""
     if not isinstance(params, Params):
         params = Params.model_validate(params)
+    if not params.concrete:
+        params = STUDY.task(robot, params).params
     return HexapodWorkspaceProblem(robot, params)
 
 
-STUDY = Study(
+STUDY = HexapodStudy(
     kind="hexapod_workspace",
     title="Hexapod tripod workspace by MOEA/D (seed 002)",
     seed_paper="002",
@@ -466,6 +504,8 @@ STUDY = Study(
     default_optimizer={"kind": "moead", "params": {"n_subproblems": 300, "n_neighbors": 20}},
     default_generations=100,
     build=build,
+    derive=derive,
+    preset=PRESET,
     robot_kinds=("legged",),
     needs=(Needs(legged=True, n_legs=(6,), leg_joints=(3, 3), revolute=True),),
     description=(
@@ -474,6 +514,10 @@ STUDY = Study(
         "the errors of the support triangle's two angles and perimeter (the body can move with "
         "the feet fixed); reports the front, its stable/unstable split, the mirrored workspace "
         "and the exact (x, y, yaw) workspace of the body with the feet fixed. A parametric "
-        "hexapod (problem.hexapod: leg lengths, hip layout) replaces the robot."
+        "hexapod (problem.hexapod: leg lengths, hip layout) replaces the robot. Defaults come "
+        "from the robot: the stance posture puts each foot 45° below its hip halfway along "
+        "the leg's reach, the coxa swing keeps clear of the neighbouring feet, the pose grid "
+        "covers the legs' reach; a stance that is not stable is refused, and an unstable "
+        "optimum is reported infeasible. Seed 002's settings are its preset on citedi_hexapod."
     ),
 )

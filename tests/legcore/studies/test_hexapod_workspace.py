@@ -28,6 +28,7 @@ from legcore.studies.hexapod_workspace.geometry import (
     tripod_from_robot,
 )
 from legcore.studies.hexapod_workspace.problem import (
+    HV_REF,
     PAPER_TABLE2,
     STUDY,
     HexapodWorkspaceProblem,
@@ -68,10 +69,16 @@ def test_registered_with_the_seed_settings() -> None:
     assert study.default_optimizer == {"kind": "moead",
                                        "params": {"n_subproblems": 300, "n_neighbors": 20}}
     assert study.default_generations == 100
-    p = Params()
+    # the paper's settings are its preset on its robot, not Params defaults (issue 25)
+    assert Params().theta2 is None and Params().stability == "constraint"
+    task = study.task(ROBOT, Params())
+    p = task.params
+    assert task.preset is not None and task.preset.startswith("seed 002")
     assert (p.theta1_min, p.theta1_max) == (-math.pi / 6, math.pi / 6)
     assert (p.theta2, p.theta3, p.theta1_start) == (-math.pi / 8, -math.pi / 4, (0.0, 0.0, 0.0))
     assert p.stability == "classify"  # the paper classifies after optimising (Fig. 9b)
+    assert (p.pose_x_extent, p.pose_xy_step, p.pose_yaw_step) == (0.04, 0.001, math.pi / 36)
+    assert p.hv_ref_point == HV_REF and p.paper_baselines
 
 
 def test_start_stance(problem: HexapodWorkspaceProblem) -> None:
@@ -318,16 +325,20 @@ def test_clear_errors() -> None:
         Params(theta1_min=0.3, theta1_max=0.1)
     with pytest.raises(ValidationError, match="extra"):
         parse_job_spec({"problem": {"kind": "hexapod_workspace", "bogus": 1}})
-    with pytest.raises(ValueError, match="problem.theta1_min"):
+    with pytest.raises(ValueError, match="^theta1_max: 1.0000 rad is outside the coxa limits"):
         build(ROBOT, Params(theta1_max=1.0))
-    with pytest.raises(ValueError, match="problem.theta3"):
+    with pytest.raises(ValueError, match="^theta3: -2.0000 rad is outside the joint limits"):
         build(ROBOT, Params(theta3=-2.0))
     with pytest.raises(ValueError, match="robot"):
         legcore.run({"robot": "puma560", "problem": {"kind": "hexapod_workspace"}})
     with pytest.raises(ValueError, match="robot"):
         build(catalog.get("animatronic_quadruped"), Params())
-    with pytest.raises(ValueError, match="pose_xy_step"):
-        Params(pose_xy_step=1e-5)
+    with pytest.raises(ValidationError, match="pose_xy_step"):
+        Params(pose_xy_step=1e-5, pose_x_extent=0.04, pose_y_extent=0.04, pose_yaw_extent=0.5,
+               pose_yaw_step=0.1)
+    # with the extents left to the robot, the same step is refused at the task, naming it
+    with pytest.raises(ValueError, match="^pose_xy_step: 1e-05 m makes a pose grid of"):
+        build(ROBOT, Params(pose_xy_step=1e-5))
 
 
 def test_paper_formula_option_and_determinism() -> None:
