@@ -1,6 +1,8 @@
 """Issue 9 "Must show", arm kinds: real robots' files (example-robot-data) × ``path_tracking``
 and ``path_placement``, each a short ``legcore.run`` of the arm presets
-(``examples/presets/path_*.yaml``) checked physically — not just "it ran":
+(``examples/presets/path_*.yaml``; the Z1 with its default, robot-derived task) checked
+physically — not just "it ran" (every matrix robot with DEFAULT task settings:
+tests/studies/test_defaults_arms.py):
 
 - the tool follows the path: Pinocchio FK of the decoded joints is on the path to 1e-6 m
   (tracking: the path at σ(t); placement: every placed target), with the tool orientation kept;
@@ -43,30 +45,30 @@ from tests.studies.conftest import refusal_message
 
 SpecOf = Callable[[str], dict[str, Any]]
 
-NSGA2 = {"kind": "nsga2", "params": {"pop_size": 20}}
+NSGA2 = {"kind": "nsga2", "params": {"pop_size": 30}}
 HKA = {"kind": "hka", "params": {"n_samples": 12, "n_best": 4, "init": "survey",
                                  "survey_size": 27, "survey_best": 3, "penalty": 1000.0}}
 
 
 def short(spec: dict[str, Any], generations: int) -> dict[str, Any]:
-    """A preset with a test-sized budget (NSGA-II 20 or HKA 12 per generation)."""
+    """A preset with a test-sized budget (NSGA-II 30 or HKA 12 per generation)."""
     opt = NSGA2 if spec["problem"]["kind"] == "path_tracking" else HKA
     return {**spec, "optimizer": opt, "budget": {"generations": generations}, "record": False}
 
 
 def z1_capsule() -> dict[str, Any]:
-    """Unitree Z1 (gripper locked): the seed's capsule at z = 0.20 m, orientation free."""
+    """Unitree Z1 (gripper locked) with its default task: seed 004's capsule scaled to its
+    reach, where it is well conditioned, with a tool orientation it holds (derived)."""
     root = erd_robots_dir()
     assert root is not None
     robot = {"kind": "urdf", "name": "z1", "urdf": (root / ERD_URDF["z1"]).read_text(),
              "locked_joints": {"jointGripper": None}}
-    return {"robot": robot, "problem": {"kind": "path_tracking", "orientation": "free",
-                                        "plane_origin": [0.0, 0.0, 0.2]}, "seed": 1}
+    return {"robot": robot, "problem": {"kind": "path_tracking"}, "seed": 1}
 
 
 @pytest.mark.parametrize("name", ["ur5", "panda", "z1"])
 def test_path_tracking_on_real_arms(name: str, preset: SpecOf) -> None:
-    spec = short(z1_capsule() if name == "z1" else preset(f"path_tracking_{name}"), 8)
+    spec = short(z1_capsule() if name == "z1" else preset(f"path_tracking_{name}"), 15)
     problem = prepare(spec).problem
     assert isinstance(problem, PathTrackingProblem)
     if name == "panda":  # the robot's own limits (MoveIt's), given in its spec by joint name
@@ -105,16 +107,17 @@ def test_arm_kinds_refuse_what_is_not_an_arm(name: str, kind: str, why: str,
 
 
 def test_a_5_joint_arm_tracks_but_does_not_place(robot_spec: SpecOf) -> None:
-    """The UR5 with its last joint locked: 5 joints, enough to track a path, not to place one."""
+    """The UR5 with its last joint locked: 5 joints, enough to track a path (its default task:
+    a path a 5-joint arm can follow, derived), not to place one."""
     ur5_5 = robot_spec("ur5") | {"locked_joints": {"wrist_3_joint": None}}
     msg = refusal_message({"robot": ur5_5, "problem": {"kind": "path_placement"}})
     assert msg == "robot: path_placement needs ≥ 6 actuated joints; robot ur5 has 5"
     ur5_4 = robot_spec("ur5") | {"locked_joints": {"wrist_3_joint": None, "wrist_2_joint": None}}
     msg = refusal_message({"robot": ur5_4, "problem": {"kind": "path_tracking"}})
     assert msg == "robot: path_tracking needs ≥ 5 actuated joints; robot ur5 has 4"
-    spec = {"robot": ur5_5, "problem": {"kind": "path_tracking", "orientation": "free",
-                                        "plane_origin": [0.1, 0.0, 0.2], "n_samples": 40}}
-    assert prepare(spec).problem.robot.nq == 5
+    spec = {"robot": ur5_5, "problem": {"kind": "path_tracking", "n_samples": 40}}
+    problem = prepare(spec).problem
+    assert problem.robot.nq == 5 and problem.task is not None and problem.task.rules
 
 
 # --------------------------------------------------------------------------- the real service
@@ -137,7 +140,7 @@ def test_one_robot_per_arm_kind_through_the_service(service: Any, preset: SpecOf
     vectors reproduce the stored metrics and pass the matrix's physical checks: the tool on the
     path / on every placed target to 1e-6 m by Pinocchio, limits, energy ≥ the gravity bound.
     A 4-joint arm is a 422 at body.robot."""
-    specs = {"path_tracking": short(preset("path_tracking_ur5"), 6),
+    specs = {"path_tracking": short(preset("path_tracking_ur5"), 15),
              "path_placement": short(preset("path_placement_panda"), 3)}
     with service.client() as c:
         jobs = {kind: c.submit(spec)["id"] for kind, spec in specs.items()}

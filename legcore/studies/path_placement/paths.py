@@ -54,6 +54,7 @@ __all__ = [
     "ToolPath",
     "builtin_path",
     "jar_path",
+    "oriented",
     "pan_path",
     "parse_path_csv",
     "rpy_to_matrix",
@@ -244,13 +245,64 @@ def jar_path(
 BUILTIN_PATHS = ("pan", "jar")
 
 
-def builtin_path(name: str, duration: float | None = None) -> ToolPath:
-    """The built-in path ``name`` (``"pan"`` or ``"jar"``) at its paper duration or ``duration``."""
+def builtin_path(name: str, duration: float | None = None, scale: float = 1.0) -> ToolPath:
+    """The built-in path ``name`` (``"pan"`` or ``"jar"``) at its paper duration or ``duration``
+    (s), its size ``scale`` × the paper's (about its centre as drawn; the orientations and the
+    time stamps unchanged). ``scale`` 1 and no ``duration``: exactly the paper's path."""
     if name == "pan":
-        return pan_path() if duration is None else pan_path(duration=duration)
+        if scale == 1.0:
+            return pan_path() if duration is None else pan_path(duration=duration)
+        return pan_path(radius=0.08 * scale, duration=PAN_DURATION if duration is None
+                        else duration)
     if name == "jar":
-        return jar_path() if duration is None else jar_path(duration=duration)
+        if scale == 1.0:
+            return jar_path() if duration is None else jar_path(duration=duration)
+        return jar_path(radius=0.06 * scale, height=0.15 * scale,
+                        duration=JAR_DURATION if duration is None else duration)
     raise ValueError(f"path: unknown built-in path {name!r}; expected one of {BUILTIN_PATHS}")
+
+
+def _rotation_onto(a: FloatArray, b: FloatArray) -> FloatArray:
+    """The smallest rotation (3, 3) taking unit vector ``a`` onto unit vector ``b`` (a half
+    turn about a horizontal axis ⊥ ``a`` when they are opposite)."""
+    v = np.cross(a, b)
+    c = float(a @ b)
+    if np.linalg.norm(v) < 1e-12:
+        if c > 0.0:
+            return np.eye(3)
+        e = np.eye(3)[int(np.argmin(np.abs(a)))]
+        u = np.cross(a, e)
+        u /= np.linalg.norm(u)
+        return 2.0 * np.outer(u, u) - np.eye(3)
+    K = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def oriented(path: ToolPath, axis: ArrayLike | None = None, spin: float = 0.0) -> ToolPath:
+    """``path`` with every tool pose turned by ``spin`` (rad) about its own z axis (the torch
+    spins freely about its axis: the same weld) and then, with ``axis`` (3,), the whole path
+    turned rigidly about its centroid by the smallest rotation that takes its mean tool axis
+    onto ``axis`` (e.g. a seam on a table turned onto a wall). No change: the path itself."""
+    if axis is None and spin == 0.0:
+        return path
+    T = path.T.copy()
+    if spin != 0.0:
+        c, s = math.cos(spin), math.sin(spin)
+        T[:, :3, :3] = T[:, :3, :3] @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    desc = path.description
+    if axis is not None:
+        a = np.asarray(axis, dtype=float)
+        a = a / np.linalg.norm(a)
+        m = T[:, :3, 2].mean(axis=0)
+        m /= np.linalg.norm(m)
+        R = _rotation_onto(m, a)
+        centroid = T[:, :3, 3].mean(axis=0)
+        T[:, :3, 3] = centroid + (T[:, :3, 3] - centroid) @ R.T
+        T[:, :3, :3] = R @ T[:, :3, :3]
+        desc += f"; turned so that its mean tool axis is {np.round(a, 4).tolist()}"
+    if spin != 0.0:
+        desc += f"; tool spun {spin:.4g} rad about its axis"
+    return ToolPath(path.name, T, path.t.copy(), desc)
 
 
 def _orthonormalize(R: FloatArray, tol: float = 1e-4) -> FloatArray:

@@ -30,14 +30,24 @@ herramienta"). For a whole population at once:
      path, as a fraction of its range (negative: the smallest margin); a path point the arm
      cannot reach adds ``1 + 10·(fraction of unreachable points)`` to each of them;
    - ``g_n+1..g_2n`` joint speed: ``max_k |q̇_ik| / q̇_max,i − 1``;
-   - ``g_2n+1`` nominal power: peak total power / P_n − 1;
+   - on an arm with torque limits (every joint's finite), joint torque:
+     ``max_k |τ_ik| / τ_max,i − 1`` (not on the seed's PUMA 560, which gives none);
+   - last, nominal power: peak total power / P_n − 1;
 5. the branch of each candidate is the best of its branches for the whole path: least total
    constraint violation, then least J (``branch="best"``); or one named closed-form branch.
 
 Reported per solution (:mod:`legcore.studies.path_placement.report`): energy, mean
 manipulability, duration, J, the constraints, and the % change against the ORIGINAL placement
-(the path where it is written: the ``original`` baseline). Seed 001 Figure 8:
+(the ``original`` baseline) — only when that placement is feasible (else NaN, and
+``extra.change_pct_reason`` says why). :meth:`PathPlacementProblem.violations` names what an
+infeasible placement breaks: the % of the path out of reach, each joint's position, speed and
+torque limit and the nominal power, in their units. Seed 001 Figure 8:
 :mod:`legcore.studies.path_placement.initialisation`.
+
+Defaults relative to the arm (the path scaled to its reach, a well-conditioned region, a
+reachable and feasible original placement, the nominal power from its limits):
+:mod:`legcore.studies.path_placement.defaults`; seed 001's settings on the PUMA 560:
+:mod:`legcore.studies.path_placement.preset`.
 """
 
 from __future__ import annotations
@@ -55,6 +65,7 @@ from legcore.kinematics import manipulability, manipulability_split
 from legcore.robots.capabilities import Needs
 from legcore.robots.model import Robot
 from legcore.studies.path_placement import report
+from legcore.studies.path_placement.defaults import derive
 from legcore.studies.path_placement.joints import gradient, placed_path_joints
 from legcore.studies.path_placement.manipulability import max_manipulability
 from legcore.studies.path_placement.params import (
@@ -64,6 +75,7 @@ from legcore.studies.path_placement.params import (
     Params,
     constraint_names,
 )
+from legcore.studies.path_placement.preset import PRESET
 from legcore.studies.path_placement.region import (
     Region,
     SphericalWorkspace,
@@ -73,6 +85,7 @@ from legcore.studies.path_placement.region import (
     simplified_workspace,
 )
 from legcore.studies.study import Solution, Study, StudyProblem
+from legcore.studies.task import Violation
 
 __all__ = [
     "CONSTRAINT_NAMES",
@@ -158,6 +171,8 @@ class PathPlacementProblem(StudyProblem):
             self.workspace = simplified_workspace(robot) if self.closed_form else reach_shell(robot)
         self.w_max = (float(params.max_manipulability) if params.max_manipulability is not None
                       else max_manipulability(robot)[0])
+        if params.nominal_power_kw is None:
+            raise ValueError("nominal_power_kw: not set (derived from the robot by Study.task)")
         self.P_n = 1000.0 * params.nominal_power_kw
         p = self.path.p
         self.anchor = p[0].copy() if params.anchor == "first" else p.mean(axis=0)
@@ -186,7 +201,9 @@ class PathPlacementProblem(StudyProblem):
         else:
             self.branches = tuple(range(len(starts)))
             self.branch_names = tuple(f"posture {i}" for i in self.branches)
-        self.constraint_names = constraint_names(n)
+        #: the joint torques are constrained on an arm whose every joint has a torque limit
+        self.torque = bool(np.all(np.isfinite(robot.tau_max)))
+        self.constraint_names = constraint_names(n, self.torque)
         self.n_samples = self.path.n_points * len(self.branches)
         ws = self.workspace
         super().__init__(3, 1, len(self.constraint_names), xl=ws.xl, xu=ws.xu,
@@ -253,7 +270,10 @@ class PathPlacementProblem(StudyProblem):
         g_pos = np.where(pen > 0.0, np.maximum(excess, 0.0) + pen, excess)
         g_vel = np.abs(qd).max(axis=-2) / robot.qd_max - 1.0
         g_pow = P_total.max(axis=-1) / self.P_n - 1.0
-        G = np.concatenate([g_pos, g_vel, g_pow[..., None]], axis=-1)
+        parts = [g_pos, g_vel]
+        if self.torque:
+            parts.append(np.abs(tau).max(axis=-2) / robot.tau_max - 1.0)
+        G = np.concatenate([*parts, g_pow[..., None]], axis=-1)
         cv = np.maximum(G, 0.0).sum(axis=-1)
         extra = None
         if detail:
@@ -330,7 +350,8 @@ class PathPlacementProblem(StudyProblem):
                              f"got {x.shape}")
         if not np.all(np.isfinite(x)):
             raise ValueError("x: must be finite")
-        return report.solution(self, x, self._detail(x), self._original_metrics())
+        return report.solution(self, x, self._detail(x), self._original_metrics(),
+                               self._original_violations())
 
     def _original_metrics(self) -> dict[str, float]:
         cached = getattr(self, "_orig_cache", None)
@@ -339,8 +360,22 @@ class PathPlacementProblem(StudyProblem):
             self._orig_cache = cached
         return cached
 
+    def _original_violations(self) -> tuple[Violation, ...]:
+        """What the original placement violates (cached): the % changes need it feasible."""
+        cached: tuple[Violation, ...] | None = getattr(self, "_orig_broken", None)
+        if cached is None:
+            cached = self.violations(self.x_original)
+            self._orig_broken = cached
+        return cached
+
     def baseline_solutions(self) -> dict[str, Solution]:
         return {"original": self.solution(self.x_original)}
+
+    def violations(self, x: FloatArray) -> tuple[Violation, ...]:
+        """What placement ``x`` (3,) breaks, in words and units: the share of the path out of
+        reach (%), each joint beyond its position limits (rad), over its speed (rad/s) or
+        torque (N·m) limit, and the peak power over P_n (W)."""
+        return report.violations(self, self._detail(np.asarray(x, dtype=float)))
 
     def free_start(self) -> tuple[str, FloatArray] | None:
         """The path where it is written (no search needed to get it)."""
@@ -352,6 +387,7 @@ class PathPlacementProblem(StudyProblem):
             "w_M": self.w_max,
             "P_n_W": self.P_n,
             "x_original": self.x_original.tolist(),
+            "original_feasible": self._original_metrics()["feasible"] == 1.0,
             "energy_kind": self.energy_kind,
             "path": {"name": self.path.name, "points": self.path.n_points,
                      "duration_s": self.path.duration, "length_m": self.path.length},
@@ -360,9 +396,14 @@ class PathPlacementProblem(StudyProblem):
 
 
 def build(robot: Robot, params: Params) -> PathPlacementProblem:
-    """The problem for ``robot`` (a serial arm of ≥ 6 joints) and validated ``params``."""
+    """The problem for ``robot`` (a serial arm of ≥ 6 joints) and validated ``params``; the
+    fields left None are filled as a submission fills them (``STUDY.task``: the preset on the
+    seed's PUMA 560, the robot-relative rules elsewhere) when the caller did not."""
     if not isinstance(params, Params):
         params = Params.model_validate(params)
+    if isinstance(robot, Robot) and robot.nq >= 6 and (
+            params.nominal_power_kw is None or params.path_scale is None):
+        params = STUDY.task(robot, params).params
     return PathPlacementProblem(robot, params)
 
 
@@ -391,11 +432,15 @@ STUDY = Study(
     build=build,
     robot_kinds=("serial",),
     needs=(NEEDS,),
+    derive=derive,
+    preset=PRESET,
     description=(
         "Where to put a tool path (welding seam, CSV of poses) in front of an arm so that it "
         "runs it with the least energy — electrical where the robot has motor data, "
         "mechanical otherwise — and the best manipulability, under joint position, speed and "
         "power limits. The anchor goes in a sphere, spherical shell or box of the base frame. "
-        "Preset: seed 001's pan and jar paths on the PUMA 560 with HKA."
+        "Default: the paper's path scaled to the arm's reach, in a well-conditioned region "
+        "around a reachable and feasible original placement. Preset: seed 001's pan and jar "
+        "paths on the PUMA 560 with HKA."
     ),
 )

@@ -11,11 +11,12 @@ from numpy.typing import NDArray
 from legcore.energy import integrate, joules_to_kwh
 from legcore.studies.path_placement.joints import gradient
 from legcore.studies.study import Motion, Solution
+from legcore.studies.task import Violation
 
 if TYPE_CHECKING:
     from legcore.studies.path_placement.problem import PathPlacementProblem
 
-__all__ = ["metrics", "motion", "solution"]
+__all__ = ["metrics", "motion", "solution", "violations"]
 
 FloatArray = NDArray[np.float64]
 
@@ -47,13 +48,54 @@ def metrics(problem: PathPlacementProblem, d: dict[str, Any]) -> dict[str, float
     return out
 
 
+def violations(problem: PathPlacementProblem, d: dict[str, Any]) -> tuple[Violation, ...]:
+    """What the placement of detail ``d`` breaks (``PathPlacementProblem.violations``)."""
+    r = problem.robot
+    names = [str(v) for v in list(r.model.names)[1:]]
+    out: list[Violation] = []
+    ok = np.asarray(d["ok"], dtype=bool)
+    K, bad = ok.size, int((~ok).sum())
+    if bad:
+        out.append(Violation(
+            "unreachable", 100.0 * bad / K, "%",
+            f"{100.0 * bad / K:.3g} % of the path ({bad} of {K} points) out of reach of "
+            f"{r.name} at this placement (with the path's tool orientations, inside the joint "
+            f"limits)"))
+    q = d["q"]
+    over = np.maximum(r.q_min - q, q - r.q_max).max(axis=0)
+    for j in (int(i) for i in np.flatnonzero(over > 0.0)):
+        out.append(Violation(
+            f"q{j + 1}_limit", float(over[j]), "rad",
+            f"joint {names[j]}: {over[j]:.3g} rad beyond its limits [{r.q_min[j]:.4g}, "
+            f"{r.q_max[j]:.4g}] rad"))
+    peaks = [("qd", "speed", np.abs(d["qd"]).max(axis=0), r.qd_max, "rad/s")]
+    if problem.torque:
+        peaks.append(("tau", "torque", np.abs(d["tau"]).max(axis=0), r.tau_max, "N·m"))
+    for key, what, peak, lim, unit in peaks:
+        for j in (int(i) for i in np.flatnonzero(peak > lim)):
+            out.append(Violation(
+                f"{key}{j + 1}_limit", float(peak[j] - lim[j]), unit,
+                f"joint {names[j]}: peak {what} {peak[j]:.4g} {unit}, "
+                f"{100.0 * (peak[j] / lim[j] - 1.0):.3g} % over its limit {lim[j]:.4g} {unit}"))
+    if d["peak_power"] > problem.P_n:
+        out.append(Violation(
+            "nominal_power", float(d["peak_power"] - problem.P_n), "W",
+            f"peak power {d['peak_power']:.4g} W, {100.0 * (d['peak_power'] / problem.P_n - 1):.3g}"
+            f" % over the nominal power P_n = {problem.P_n:.4g} W"))
+    return tuple(out)
+
+
 def solution(
-    problem: PathPlacementProblem, x: FloatArray, d: dict[str, Any], ref: dict[str, float]
+    problem: PathPlacementProblem, x: FloatArray, d: dict[str, Any], ref: dict[str, float],
+    ref_broken: tuple[Violation, ...] = (),
 ) -> Solution:
     """The decoded :class:`Solution` of placement ``x`` with detail ``d``; ``ref``: the
-    original placement's metrics."""
+    original placement's metrics, ``ref_broken`` what it violates (then no % change: NaN,
+    and ``extra.change_pct_reason`` says why)."""
     out = metrics(problem, d)
     def pct(num: float, den: float) -> float | None:
+        if ref_broken:
+            return math.nan
         return 100.0 * num / den if den != 0.0 and math.isfinite(num / den) else None
 
     # the % changes (left out where the reference is 0, e.g. an original out of reach); the
@@ -95,6 +137,10 @@ def solution(
         "ik": "closed form (PUMA-type)" if problem.closed_form else "numerical",
         "region": problem.workspace.as_dict(),
     }
+    if ref_broken:
+        extra["change_pct_reason"] = (
+            "no % change: the reference (the original placement) is infeasible on "
+            f"{problem.robot.name}: " + "; ".join(v.text or v.constraint for v in ref_broken))
     return Solution(x=x.copy(), objectives={"J": d["J"]}, metrics=out, table=table,
                     motion=mo, extra=extra)
 

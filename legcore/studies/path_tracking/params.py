@@ -1,8 +1,13 @@
 """Parameters of the ``path_tracking`` study: the path, the tool orientation, the time law and
-the limits (defaults: seed 004's capsule and law on its 5-DOF arm — the preset).
+the limits.
 
 Units: m, rad, s. The path is a chain of lines and arcs in plane coordinates (u, v), placed in
-the world by ``plane_origin`` + u ``plane_e1`` + v ``plane_e2`` — any plane.
+the world by ``plane_origin`` + u ``plane_e1`` + v ``plane_e2`` — any plane. The fields that
+depend on the arm (the path, its plane, the tool orientation, the rest posture, the reference
+speed and the speed box) default to None: derived from the robot by
+:mod:`legcore.studies.path_tracking.defaults` (seed 004's capsule scaled to the arm's reach, in
+a well-conditioned part of its workspace); on seed 004's own arm the preset
+(:mod:`legcore.studies.path_tracking.preset`) gives the paper's values.
 """
 
 from __future__ import annotations
@@ -20,6 +25,9 @@ from legcore.trajectories.paths import JOIN_TOL, Arc, Line, Plane
 __all__ = [
     "CAPSULE",
     "DEFAULT_QDD_MAX",
+    "SEED_T_A",
+    "SEED_T_D",
+    "SEED_V",
     "SEED_SEGMENT_TIMES",
     "ArcSegment",
     "LineSegment",
@@ -96,29 +104,50 @@ CAPSULE: tuple[LineSegment | ArcSegment, ...] = (
 _CORNER_TOL = 1e-6  # rad: a join turning the path's tangent more than this is a corner
 
 
-class Params(StudyParams):
-    """Parameters of the ``path_tracking`` study (defaults: seed 004's own settings).
+def _ortho(v: tuple[float, float, float] | None) -> tuple[float, float, float]:
+    """A unit vector ⊥ ``v`` (to check one given plane axis alone)."""
+    a = np.asarray(v, dtype=float)
+    e = np.eye(3)[int(np.argmin(np.abs(a)))]
+    b = np.cross(a, e)
+    n = float(np.linalg.norm(b))
+    return (1.0, 0.0, 0.0) if n == 0.0 else (float(b[0] / n), float(b[1] / n), float(b[2] / n))
 
-    - ``segments``: the path, consecutive lines/arcs in plane coordinates (m, rad); default the
-      seed's capsule (arcs r = 0.10 m about (±0.20, 0.30) m, lines at v = 0.40 and 0.20 m,
-      counter-clockwise from (0.20, 0.20) m). Each segment must start where the previous ends,
-      in the same direction (no corner: the tool does not stop between segments).
+
+class Params(StudyParams):
+    """Parameters of the ``path_tracking`` study. None: derived from the robot
+    (:mod:`~legcore.studies.path_tracking.defaults`, the rule in ``Task.rules``); seed 004's
+    values on its own arm (the preset).
+
+    - ``segments``: the path, consecutive lines/arcs in plane coordinates (m, rad); None: seed
+      004's capsule (arcs r = 0.10 m about (±0.20, 0.30) m, lines at v = 0.40 and 0.20 m,
+      counter-clockwise from (0.20, 0.20) m) scaled to the arm's reach, centred on the plane
+      origin. Each segment must start where the previous ends, in the same direction (no
+      corner: the tool does not stop between segments).
     - ``plane_origin``, ``plane_e1``, ``plane_e2``: the plane in the world (m; orthonormal axes);
-      default the horizontal plane z = 0.50 m ("a una altura de 50cm").
+      None: through a well-conditioned point of the arm's workspace, normal to the tool axis
+      (horizontal for a free orientation), e1 across and e2 away from the arm (seed: the
+      horizontal plane z = 0.50 m, "a una altura de 50cm").
     - ``orientation``: ``"down"`` (the tool z axis points straight down, the seed), ``"axis"``
-      (along ``tool_axis``, any fixed world direction) or ``"free"`` (position only).
+      (along ``tool_axis``, any fixed world direction) or ``"free"`` (position only); None: the
+      first the arm can hold along the whole path of down, forward (away from the arm,
+      horizontal), up, free.
     - ``tool_yaw``: with an axis, None leaves the spin about it free (the seed: joint 5 stays
       at its rest value); a heading (rad) holds the tool's x axis fixed in the world too.
     - ``rest``: the posture (rad, one value per joint) the IK starts the path from — its branch
-      is followed — and a redundant arm is pulled toward; default the robot's home.
+      is followed — and a redundant arm is pulled toward; None: with a derived path, the
+      well-conditioned posture the path is centred on; with a given path, the robot's home.
     - ``objective``: ``"time"`` (T), ``"energy"`` (E) or ``"energy_time"`` (both).
     - ``speeds``: ``"per_segment"`` (one cruise speed per segment + t_a, t_d, t_b) or
       ``"single"`` (one speed, t_a, t_d — the seed's scheme).
     - ``ramp``: speed-ramp shape, ``"linear"`` (the seed's trapezoid) or ``"cubic"``.
-    - ``V``, ``t_a``, ``t_d``: the seed's law (m/s, s, s) used as the ``seed`` baseline.
+    - ``V``, ``t_a``, ``t_d``: the seed's law (m/s, s, s) used as the ``seed`` baseline; V
+      None: 0.10 m/s scaled with the path, at most half the fastest speed the arm's joint
+      speed limits allow everywhere on it (t_a = t_d = 3 s: a path scaled with its speeds
+      keeps its times).
     - ``V_bounds`` (m/s), ``ramp_bounds`` (s, for t_a, t_d, t_b): the decision box (each
       segment's speed bound is lowered further to the fastest speed at which the arm's joint
-      speed limits can hold somewhere on it: faster is infeasible).
+      speed limits can hold somewhere on it: faster is infeasible); V_bounds None: (V/10,
+      10 V), the seed's (0.01, 1.0) m/s about its V = 0.10 m/s.
     - ``T_max``: optional cycle-time cap (s), a constraint.
     - ``qdd_max``: joint acceleration limits (rad/s²), one for every joint or one per joint;
       ``"robot"`` (default): the robot's own (``qdd_max`` of its DH joints, or of its URDF
@@ -126,49 +155,66 @@ class Params(StudyParams):
       acceleration limit (then a time optimum has millisecond ramps — physically
       meaningless). Speed and torque limits are the robot's.
     - ``n_samples``: time samples per candidate trajectory (evaluation and decoding).
+    - ``limit_check``: the joint limits are checked on the ``n_samples`` samples, just before
+      every speed-ramp boundary and on both sides of every segment join (where q̈ jumps) and,
+      for a candidate within 2 % of a limit, again on ``limit_check`` × ``n_samples`` samples
+      (so that the optimum keeps its limits between the samples too); 1: on the samples only
+      (seed 004's evaluation, its preset).
     """
 
     kind: Literal["path_tracking"] = "path_tracking"
-    segments: tuple[PathSegment, ...] = Field(default=CAPSULE, min_length=1, max_length=64)
-    plane_origin: Point3 = (0.0, 0.0, 0.50)
-    plane_e1: Point3 = (1.0, 0.0, 0.0)
-    plane_e2: Point3 = (0.0, 1.0, 0.0)
-    orientation: Literal["down", "axis", "free"] = "down"
+    segments: tuple[PathSegment, ...] | None = Field(default=None, min_length=1, max_length=64)
+    plane_origin: Point3 | None = None
+    plane_e1: Point3 | None = None
+    plane_e2: Point3 | None = None
+    orientation: Literal["down", "axis", "free"] | None = None
     tool_axis: Point3 | None = None
     tool_yaw: Finite | None = None
     rest: tuple[Finite, ...] | None = Field(default=None, min_length=1, max_length=12)
     objective: Literal["time", "energy", "energy_time"] = "time"
     speeds: Literal["per_segment", "single"] = "per_segment"
     ramp: Literal["linear", "cubic"] = "linear"
-    V: Finite = Field(default=SEED_V, gt=0.0)
+    V: Finite | None = Field(default=None, gt=0.0)
     t_a: Finite = Field(default=SEED_T_A, gt=0.0)
     t_d: Finite = Field(default=SEED_T_D, gt=0.0)
-    V_bounds: tuple[Finite, Finite] = (0.01, 1.0)
+    V_bounds: tuple[Finite, Finite] | None = None
     ramp_bounds: tuple[Finite, Finite] = (0.005, 5.0)
     T_max: Finite | None = Field(default=None, gt=0.0)
     qdd_max: Positive | tuple[Positive, ...] | Literal["robot"] | None = "robot"
     n_samples: int = Field(default=400, ge=20, le=20_000)
+    limit_check: int = Field(default=10, ge=1, le=50)
 
     @model_validator(mode="after")
     def _check(self) -> Params:
         for name in ("V_bounds", "ramp_bounds"):
-            lo, hi = getattr(self, name)
+            bounds = getattr(self, name)
+            if bounds is None:
+                continue
+            lo, hi = bounds
             if not 0.0 < lo <= hi:
                 raise ValueError(f"{name}: need 0 < lower <= upper, got ({lo}, {hi})")
-        try:
-            self.plane()
-        except ValueError as exc:
-            raise ValueError(f"plane_e1/plane_e2: {exc}") from None
-        if (self.orientation == "axis") != (self.tool_axis is not None):
+        if self.plane_e1 is not None or self.plane_e2 is not None:
+            e1 = self.plane_e1 if self.plane_e1 is not None else _ortho(self.plane_e2)
+            e2 = self.plane_e2 if self.plane_e2 is not None else _ortho(self.plane_e1)
+            try:
+                Plane(np.zeros(3), np.array(e1), np.array(e2))
+            except ValueError as exc:
+                raise ValueError(f"plane_e1/plane_e2: {exc}") from None
+        if self.tool_axis is not None and self.orientation not in (None, "axis"):
+            raise ValueError("tool_axis: give it with orientation 'axis' (and only then)")
+        if self.orientation == "axis" and self.tool_axis is None:
             raise ValueError("tool_axis: give it with orientation 'axis' (and only then)")
         if self.orientation == "free" and self.tool_yaw is not None:
             raise ValueError("tool_yaw: a heading needs a tool axis, not orientation 'free'")
-        try:
-            self.tool()
-        except ValueError as exc:
-            raise ValueError(str(exc)) from None
+        if self.orientation is not None:
+            try:
+                self.tool()
+            except ValueError as exc:
+                raise ValueError(str(exc)) from None
         if isinstance(self.qdd_max, tuple) and not 1 <= len(self.qdd_max) <= 12:
             raise ValueError("qdd_max: one value, or one per joint (1 to 12)")
+        if self.segments is None:
+            return self
         curves = [s.curve() for s in self.segments]
         for k in range(1, len(curves)):
             a, b = curves[k - 1], curves[k]
@@ -190,11 +236,22 @@ class Params(StudyParams):
                 )
         return self
 
+    def concrete(self) -> bool:
+        """True when every robot-relative field is set (the task of a robot; else
+        ``Study.task`` derives the missing ones)."""
+        return None not in (self.segments, self.plane_origin, self.plane_e1, self.plane_e2,
+                            self.orientation, self.V, self.V_bounds)
+
     def plane(self) -> Plane:
+        """The path's plane (ValueError while it is still to be derived from the robot)."""
+        if self.plane_origin is None or self.plane_e1 is None or self.plane_e2 is None:
+            raise ValueError("plane_origin: not set (derived from the robot by Study.task)")
         return Plane(np.array(self.plane_origin), np.array(self.plane_e1), np.array(self.plane_e2))
 
     def tool(self) -> ToolOrientation:
         """The tool orientation these parameters ask for."""
+        if self.orientation is None:
+            raise ValueError("orientation: not set (derived from the robot by Study.task)")
         if self.orientation == "free":
             return ToolOrientation(None)
         axis = (0.0, 0.0, -1.0) if self.orientation == "down" else self.tool_axis

@@ -24,9 +24,23 @@ Objectives (minimised, ``objective``): ``"time"`` — cycle time T (s); ``"energ
 joint torques ``max|τ_i| / τ_max,i − 1``, ramps fitting inside their segments
 ``max_k fit_k − 1``, and with ``T_max`` the cycle time ``T / T_max − 1``.
 
+The limits hold between the samples too (``limit_check`` > 1, every task but seed 004's
+preset): every candidate is also checked just before each speed-ramp boundary and on both
+sides of each segment join (:meth:`PathTrackingProblem.edge_times`: q̈ jumps there, and the
+regular samples only approach the one-sided limits), a candidate within a few % of a limit
+again on ``limit_check`` × K samples (the larger peaks count), and
+:meth:`PathTrackingProblem.violations` reports every limit the decoded motion breaks on that
+dense resampling (which joint, by how much, in its units).
+
 Baselines: ``seed`` — the paper's own law (V = 10 cm/s on every segment, t_a = t_d = 3 s:
-segment times 4.6416 / 4 / 3.1416 / 5.5 s, profiles accel · constant · constant · decel), and
-``seed_max_V`` — the same scheme at the largest single V that satisfies every constraint.
+segment times 4.6416 / 4 / 3.1416 / 5.5 s, profiles accel · constant · constant · decel; on
+another arm the same law with the derived reference speed V), and ``seed_max_V`` — the same
+scheme at the largest single V that satisfies every constraint. The front's % changes are
+computed against the seed law only when it is feasible (else None, with the reason).
+
+Defaults relative to the arm (the path scaled to its reach, placed where it is well
+conditioned, a tool orientation it holds): :mod:`legcore.studies.path_tracking.defaults`;
+seed 004's own settings: :mod:`legcore.studies.path_tracking.preset`.
 """
 
 from __future__ import annotations
@@ -45,6 +59,8 @@ from legcore.joint_metrics import joint_metrics
 from legcore.problems.base import constraint_violation
 from legcore.robots.capabilities import Needs
 from legcore.robots.model import Robot
+from legcore.studies.path_tracking import limits
+from legcore.studies.path_tracking.defaults import derive
 from legcore.studies.path_tracking.joints import (
     JointPath,
     check_slowest_speed,
@@ -60,6 +76,7 @@ from legcore.studies.path_tracking.params import (
     LineSegment,
     Params,
 )
+from legcore.studies.path_tracking.preset import PRESET
 from legcore.studies.path_tracking.timelaw import (
     RampShape,
     TimeLaw,
@@ -67,6 +84,7 @@ from legcore.studies.path_tracking.timelaw import (
     segment_profiles,
 )
 from legcore.studies.study import Motion, Solution, Study, StudyProblem
+from legcore.studies.task import Violation
 from legcore.trajectories.sampling import compose_time_law
 
 __all__ = [
@@ -128,6 +146,10 @@ class PathTrackingProblem(StudyProblem):
                 f"robot: path_tracking needs a serial arm of ≥ 5 actuated joints; robot "
                 f"{getattr(robot, 'name', robot)} has {getattr(robot, 'nq', 'no serial chain')}"
             )
+        if not params.concrete():
+            raise ValueError("segments: the robot-relative parameters are not derived yet "
+                             "(build through Study.build / legcore.run)")
+        assert params.segments is not None and params.V_bounds is not None
         self.robot = robot
         self.params = params
         self.path = ArcLengthPath(tuple(s.curve() for s in params.segments), params.plane())
@@ -194,6 +216,7 @@ class PathTrackingProblem(StudyProblem):
         """The seed's law as a decision vector: one speed ``V`` (default ``params.V``) on every
         segment, ``params.t_a``/``t_d``; t_b (irrelevant at equal speeds) = its lower bound."""
         p = self.params
+        assert p.V is not None
         v = p.V if V is None else V
         if p.speeds == "single":
             return np.array([v, p.t_a, p.t_d])
@@ -207,17 +230,28 @@ class PathTrackingProblem(StudyProblem):
 
     # ------------------------------------------------------------------ batch simulation
     def simulate(
-        self, X: FloatArray, shape: RampShape | None = None, full: bool = True
+        self, X: FloatArray, shape: RampShape | None = None, full: bool = True,
+        samples: int | None = None, extra_times: bool = False,
     ) -> dict[str, Any]:
         """Whole-batch motion: ``t`` (B, K) s, tool ``p``/``pd``/``pdd``/``pddd`` (B, K, 3),
         ``q``/``qd``/``qdd``/``jerk``/``tau`` (B, K, n), ``law``, ``E`` (B,) J, ``E_joint``
-        (B, n) J, ``T`` (B,) s, and ``G`` (B, n_constr). ``full=False`` (the evaluation): no
-        tool path, and ``E``/``E_joint`` only when an objective is the energy. The joints by one
-        numba pass (``compose_ppoly``), equal to ``compose_time_law(self.joints.derivatives(σ),
+        (B, n) J, ``T`` (B,) s, and ``G`` (B, n_constr) on these K samples (``samples``,
+        default ``n_samples``; with ``extra_times`` also the instants just before every
+        phase boundary and just before and after every segment join, where q̈ jumps:
+        :meth:`edge_times`). ``full=False`` (the evaluation): no tool path, and
+        ``E``/``E_joint`` only when an objective is the energy. The joints by one numba pass
+        (``compose_ppoly``), equal to ``compose_time_law(self.joints.derivatives(σ),
         σ-derivatives)``."""
         law = self.time_law(X, shape)
-        B, K, n = law.T.shape[0], self.n_samples, self.robot.nq
-        t = law.sample_times(K, _RAMP_SAMPLES)
+        B, n = law.T.shape[0], self.robot.nq
+        if samples == 0:
+            t = np.sort(self.edge_times(law), axis=1)
+        else:
+            t = law.sample_times(self.n_samples if samples is None else int(samples),
+                                 _RAMP_SAMPLES)
+            if extra_times:
+                t = np.sort(np.concatenate([t, self.edge_times(law)], axis=1), axis=1)
+        K = t.shape[1]
         sig = law.evaluate(t)  # (4, B, K)
         s4 = sig.reshape(4, B * K)
         Q = compose_ppoly(self.joints.poly, s4).reshape(4, B, K, n)
@@ -234,7 +268,8 @@ class PathTrackingProblem(StudyProblem):
             "law": law, "t": t, "q": q, "qd": qd, "qdd": qdd, "jerk": jerk, "tau": tau,
             "T": law.T, "G": Gm,
         }
-        if full or "energy" in self.objective_names:
+        regular = samples is None and not extra_times  # the objective's own samples
+        if full or ("energy" in self.objective_names and regular):
             en = mechanical_energy(qd, tau, t)
             out.update(E=en.total, E_joint=en.per_joint)
         if full:
@@ -248,7 +283,18 @@ class PathTrackingProblem(StudyProblem):
 
     def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         sim = self.simulate(X, full=False)
-        return self._objectives(sim), sim["G"]
+        G = sim["G"]
+        if self.params.limit_check > 1:
+            G = self._dense_limits(X, G, self.params.limit_check)
+        return self._objectives(sim), G
+
+    def edge_times(self, law: TimeLaw) -> FloatArray:
+        """(B, E) instants where the joint accelerations jump (:func:`.limits.edge_times`)."""
+        return limits.edge_times(self, law)
+
+    def _dense_limits(self, X: FloatArray, G: FloatArray, factor: int,
+                      shape: RampShape | None = None, every: bool = False) -> FloatArray:
+        return limits.dense_limits(self, X, G, factor, shape, every)
 
     # ------------------------------------------------------------------ decoding
     def solution(self, x: FloatArray, shape: RampShape | None = None) -> Solution:
@@ -266,6 +312,8 @@ class PathTrackingProblem(StudyProblem):
         power = tau * qd
         energy = _cumulative_trapezoid(np.abs(power).sum(axis=1), t)
         G = sim["G"][0]
+        if self.params.limit_check > 1:
+            G = self._dense_limits(x, sim["G"], self.params.limit_check, shape)[0]
         cv = float(constraint_violation(G[None, :])[0])
         seg_T = law.segment_times()[0]
         V, t_a, t_d, t_b = (a[0] for a in self.split(x))
@@ -337,17 +385,28 @@ class PathTrackingProblem(StudyProblem):
         return Solution(x=x[0].copy(), objectives=objectives, metrics=metrics, table=table,
                         motion=motion, extra=extra)
 
+    def violations(self, x: FloatArray) -> tuple[Violation, ...]:
+        """Every limit the motion of ``x`` breaks, on its samples and on a resampling of at
+        least 10 × ``n_samples`` and the instants where q̈ jumps (so between the optimiser's
+        samples too): which joint, its peak and its limit in rad/s, rad/s² or N·m; the ramps'
+        overrun; the cycle time (:func:`.limits.limit_violations`)."""
+        return limits.limit_violations(self, x)
+
     # ------------------------------------------------------------------ baselines
     @cached_property
     def seed_max_V(self) -> float:
         """Largest single V (m/s) for which the seed's scheme (t_a, t_d of ``params``, linear
         ramps) satisfies every constraint; found by two batched scans of the V box."""
+        assert self.params.V_bounds is not None
         lo, hi = self.params.V_bounds
         best = float("nan")
         for _ in range(3):
             Vs = np.linspace(lo, hi, 41)
             X = np.stack([self.seed_x(v) for v in Vs])
-            ok = np.all(self.simulate(X, "linear", full=False)["G"] <= 0.0, axis=1)
+            G = self.simulate(X, "linear", full=False)["G"]
+            if self.params.limit_check > 1:
+                G = self._dense_limits(X, G, self.params.limit_check, "linear")
+            ok = np.all(G <= 0.0, axis=1)
             if not ok.any():
                 break
             i = int(np.flatnonzero(ok).max())
@@ -367,27 +426,49 @@ class PathTrackingProblem(StudyProblem):
         return out
 
     def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
-        """The front in readable form with the % change of each objective against the seed."""
-        seed = self._objectives(self.simulate(self.seed_x()[None, :], "linear"))[0]
+        """The front in readable form with the % change of each objective against the seed
+        law — only when that law is feasible on this arm (else None, and ``change_pct_reason``
+        says which limits it breaks)."""
+        x_seed = self.seed_x()
+        seed = self._objectives(self.simulate(x_seed[None, :], "linear"))[0]
+        broken = self._seed_violations()
         rows = []
         for x, f in zip(np.atleast_2d(front_X), np.atleast_2d(front_F), strict=True):
-            row = {name: float(v) for name, v in zip(self.variable_names, x, strict=True)}
+            row: dict[str, Any] = {
+                name: float(v) for name, v in zip(self.variable_names, x, strict=True)}
             row |= {name: float(v) for name, v in zip(self.objective_names, f, strict=True)}
-            row |= {f"{name}_change_pct": float(100.0 * (v / s - 1.0))
+            row |= {f"{name}_change_pct": None if broken else float(100.0 * (v / s - 1.0))
                     for name, v, s in zip(self.objective_names, f, seed, strict=True)}
             rows.append(row)
         rows.sort(key=lambda r: r[self.objective_names[0]])
-        return {
+        out: dict[str, Any] = {
             "seed_objectives": dict(zip(self.objective_names, seed.tolist(), strict=True)),
+            "seed_feasible": not broken,
             "seed_max_V": self.seed_max_V,
             "front": rows,
         }
+        if broken:
+            out["change_pct_reason"] = (
+                "no % change: the reference (the paper's time law) is infeasible on "
+                f"{self.robot.name}: " + "; ".join(v.text for v in broken))
+        return out
+
+    def _seed_violations(self) -> tuple[Violation, ...]:
+        """What the seed law (linear ramps) violates on this arm (cached)."""
+        cached: tuple[Violation, ...] | None = getattr(self, "_seed_broken", None)
+        if cached is None:
+            cached = limits.limit_violations(self, self.seed_x(), "linear")
+            self._seed_broken = cached
+        return cached
 
 
 def build(robot: Any, params: Any) -> PathTrackingProblem:
-    """``Study.build``: the problem for ``robot`` (a serial arm of ≥ 5 joints) and ``params``."""
+    """``Study.build``: the problem for ``robot`` (a serial arm of ≥ 5 joints) and ``params``
+    (robot-relative fields left None are derived here when the caller did not: no preset)."""
     if not isinstance(params, Params):
         params = Params.model_validate(params)
+    if isinstance(robot, Robot) and not params.concrete():
+        params = derive(robot, params).params
     return PathTrackingProblem(robot, params)
 
 
@@ -402,10 +483,14 @@ STUDY = Study(
     build=build,
     robot_kinds=("serial",),
     needs=(NEEDS,),
+    derive=derive,
+    preset=PRESET,
     description=(
         "An arm runs a fixed path of lines and arcs in any plane, its tool pointing down, "
         "along a fixed axis or free; the cruise speed of each segment and the ramp times are "
         "optimised for cycle time and/or mechanical energy under the joint speed, "
-        "acceleration and torque limits. Preset: seed 004's capsule on articulated_5dof."
+        "acceleration and torque limits. Default: seed 004's capsule scaled to the arm's reach, "
+        "where it is well conditioned, with a tool orientation it can hold. Preset: seed 004's "
+        "capsule on articulated_5dof."
     ),
 )

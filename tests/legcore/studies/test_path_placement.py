@@ -33,6 +33,7 @@ from legcore.studies.path_placement.paths import (
     parse_path_csv,
     rpy_to_matrix,
 )
+from legcore.studies.path_placement.preset import PRESET
 from legcore.studies.path_placement.problem import (
     CONSTRAINT_NAMES,
     STUDY,
@@ -44,6 +45,13 @@ from legcore.studies.path_placement.problem import (
 from legcore.studies.registry import get_study
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+#: Seed 001's settings (the preset's), for a PUMA 560 that is not the catalog's (no preset)
+SEED: dict[str, Any] = dict(PRESET.params)
+
+
+def seed_params(**kw: Any) -> Params:
+    """``Params`` with seed 001's settings (the preset) and ``kw``."""
+    return Params.model_validate({**SEED, **kw})
 
 
 @pytest.fixture(scope="module")
@@ -284,8 +292,8 @@ def test_numerical_ik_path_equals_the_closed_form_fast_path(robot: Any, pan: Any
                                    starts=q_cf[:1], rest=q_cf[0])
     assert ok.all()
     np.testing.assert_allclose(q_num[0, 0], q_cf, atol=1e-8)
-    pr = build(arm, Params(path="pan", region=_seed_shell(pan), postures=(tuple(q_cf[0]),),
-                           max_manipulability=pan.w_max, friction=False))
+    pr = build(arm, seed_params(path="pan", region=_seed_shell(pan), postures=(tuple(q_cf[0]),),
+                                max_manipulability=pan.w_max, friction=False))
     assert not pr.closed_form and pr.branch_names == ("posture 0",)
     s = pr.solution(x0)
     assert s.extra["ik"] == "numerical" and s.extra["energy_kind"] == "electrical"
@@ -300,7 +308,7 @@ def test_numerical_ik_path_equals_the_closed_form_fast_path(robot: Any, pan: Any
 def test_regions_energy_kinds_and_refusals(pan: Any) -> None:
     arm = _numeric_puma(motors=False)
     box = {"kind": "box", "lo": (0.2, -0.5, 0.3), "hi": (0.7, 0.5, 0.9)}
-    pr = build(arm, Params(path="pan", region=box, original=(0.25, 0.0, 0.80)))
+    pr = build(arm, seed_params(path="pan", region=box, original=(0.25, 0.0, 0.80)))
     assert pr.xl == pytest.approx([0.2, -0.5, 0.3]) and pr.energy_kind == "mechanical"
     assert pr.workspace.point([0.3, 0.1, 0.5]) == pytest.approx([0.3, 0.1, 0.5])
     s = pr.solution(np.array([0.5, 0.1, 0.6]))
@@ -311,21 +319,21 @@ def test_regions_energy_kinds_and_refusals(pan: Any) -> None:
     P = np.abs(m.tau * m.qd).sum(axis=1)
     assert s.metrics["energy_J"] == pytest.approx(float(np.sum(0.5 * (P[1:] + P[:-1]) * np.diff(
         m.t))), rel=1e-12)
-    sphere = build(arm, Params(path="pan", region={"kind": "sphere", "center": (0, 0, 0.67),
-                                                   "radius": 0.8}))
+    sphere = build(arm, seed_params(path="pan", region={"kind": "sphere",
+                                                        "center": (0, 0, 0.67), "radius": 0.8}))
     assert sphere.xl == pytest.approx([0.0, -math.pi / 2, -math.pi])
     assert sphere.xu == pytest.approx([0.8, math.pi / 2, math.pi])
-    default = build(arm, Params(path="pan"))  # not PUMA-type: the reach shell about the shoulder
+    default = build(arm, seed_params(path="pan"))  # no closed form: the reach shell
     assert default.workspace.source.startswith("reach shell")
     assert default.workspace.origin == pytest.approx(pan.workspace.origin)  # O_s, on the axis
     assert default.workspace.R_max > pan.workspace.R_max
     with pytest.raises(ValueError, match="^robot: path_placement with energy 'electrical' "
                                          "needs motor data"):
-        build(arm, Params(path="pan", energy="electrical"))
+        build(arm, seed_params(path="pan", energy="electrical"))
     with pytest.raises(ValueError, match="^branch: the named branches"):
-        build(arm, Params(path="pan", branch="left-up-flip"))
+        build(arm, seed_params(path="pan", branch="left-up-flip"))
     with pytest.raises(ValueError, match="^postures.0: 2 values for the 6 joints"):
-        build(arm, Params(path="pan", postures=((0.0, 1.0),)))
+        build(arm, seed_params(path="pan", postures=((0.0, 1.0),)))
     with pytest.raises(ValueError, match="R: need 0 <= R_min < R_max"):
         Params(region={"kind": "shell", "center": (0, 0, 0), "R": (0.5, 0.2)})
     mech = build(catalog.get("puma560"), Params(path="pan", energy="mechanical"))
@@ -396,3 +404,23 @@ def test_plain_vs_modified_initialisation_are_both_reported(pan: Any) -> None:
     assert all(r["n_evals"] == 216 + 9 * 30 for r in survey)
     # seed 001 Figure 8: the modified initialisation does at least as well on average
     assert s["survey"]["J"]["mean"] <= s["center"]["J"]["mean"] + 1e-9
+
+
+def test_defaults_on_an_arm_that_is_not_the_seeds() -> None:
+    """The PUMA 560 kinematics under another name and without its closed form (no preset):
+    its nominal power cannot be derived (no torque limits: refused, naming the field); given
+    P_n, the pan keeps its size (the same reach), the original placement is derived where the
+    whole path is reachable and every constraint holds, inside the derived region."""
+    arm = _numeric_puma(motors=False)
+    verdict = STUDY.fit(arm)
+    assert not verdict.accepted and verdict.field == "nominal_power_kw"
+    assert "give nominal_power_kw" in (verdict.reason or "")
+    task = STUDY.task(arm, Params(nominal_power_kw=0.4))
+    p = task.params
+    assert task.preset is None and p.path_scale == pytest.approx(1.0, abs=1e-3)
+    assert {"original", "region", "postures", "path_scale"} <= set(task.rules)
+    pr = build(arm, p)
+    assert not pr.violations(pr.x_original)  # reachable and feasible: the % reference
+    assert np.all(pr.x_original >= pr.xl) and np.all(pr.x_original <= pr.xu)
+    s = pr.solution(pr.xl + 0.5 * (pr.xu - pr.xl))
+    assert all(math.isfinite(s.metrics[k]) for k in ("energy_change_pct", "time_change_pct"))

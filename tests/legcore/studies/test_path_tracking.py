@@ -24,7 +24,6 @@ from legcore.studies.path_tracking.problem import (
     STUDY,
     Params,
     PathTrackingProblem,
-    build,
 )
 from legcore.studies.registry import get_study
 from legcore.trajectories import capsule_path
@@ -40,7 +39,7 @@ def arm():
 
 @pytest.fixture(scope="module")
 def problem(arm) -> PathTrackingProblem:
-    return build(arm, Params())
+    return STUDY.build(arm, Params())
 
 
 @pytest.fixture(scope="module")
@@ -48,10 +47,18 @@ def seed(problem):
     return problem.solution(problem.seed_x(), "linear")
 
 
-def test_defaults_are_the_seed(problem):
-    p = Params()
+def test_defaults_are_the_seed(arm, problem):
+    """On seed 004's own arm the preset fills every robot-relative field with the paper's
+    values (Params leaves them None: derived from any other robot)."""
+    assert Params().plane_origin is None and Params().V is None
+    task = STUDY.task(arm, Params())
+    p = task.params
     assert (p.V, p.t_a, p.t_d) == (0.10, 3.0, 3.0)
     assert p.plane_origin == (0.0, 0.0, 0.50)
+    assert p.V_bounds == (0.01, 1.0) and p.ramp_bounds == (0.005, 5.0)
+    assert p.orientation == "down" and p.rest is None and p.limit_check == 1
+    assert task.preset is not None and "seed 004" in task.preset and task.rules == {}
+    assert STUDY.preset is not None and STUDY.preset.robot == STUDY.default_robot
     ref = capsule_path()
     np.testing.assert_allclose(problem.path.lengths, ref.lengths, rtol=1e-15)
     sig = np.linspace(0.0, problem.path.length, 101)
@@ -66,11 +73,11 @@ def test_acceleration_limits_default_to_the_robots(arm):
     """qdd_max "robot" (the default): the robot's own limits, 5 rad/s² (assumed) where it
     gives none — the seed arm gives none, so the seed's 5 rad/s² everywhere."""
     assert Params().qdd_max == "robot"
-    np.testing.assert_array_equal(build(arm, Params()).qdd_max, 5.0)
+    np.testing.assert_array_equal(STUDY.build(arm, Params()).qdd_max, 5.0)
     limited = dataclasses.replace(arm, qdd_max=np.array([1.0, 2.0, np.inf, np.inf, 3.0]))
-    np.testing.assert_array_equal(build(limited, Params()).qdd_max, [1.0, 2.0, 5.0, 5.0, 3.0])
-    np.testing.assert_array_equal(build(limited, Params(qdd_max=7.0)).qdd_max, 7.0)
-    assert np.all(np.isinf(build(limited, Params(qdd_max=None)).qdd_max))
+    np.testing.assert_array_equal(STUDY.build(limited, Params()).qdd_max, [1.0, 2.0, 5.0, 5.0, 3.0])
+    np.testing.assert_array_equal(STUDY.build(limited, Params(qdd_max=7.0)).qdd_max, 7.0)
+    assert np.all(np.isinf(STUDY.build(limited, Params(qdd_max=None)).qdd_max))
 
 
 def test_speed_box_cuts_off_only_infeasible_speeds(problem):
@@ -166,7 +173,7 @@ def scene_ok(scene: dict) -> bool:
 def test_joint_rates_equal_the_differentiated_closed_form(arm):
     """q̇, q̈, q⃛ of the interpolated joint path against the exact reference (seed 004's closed
     form differentiated, ``arm5_down_rates``), the Jacobian and finite differences."""
-    pr = build(arm, Params(n_samples=20_000, ramp="cubic"))
+    pr = STUDY.build(arm, Params(n_samples=20_000, ramp="cubic"))
     x = np.array([0.45, 0.55, 0.5, 0.25, 0.4, 0.6, 0.5])
     sim = pr.simulate(x[None, :])
     t, q, qd, qdd, jerk = (sim[k][0] for k in ("t", "q", "qd", "qdd", "jerk"))
@@ -217,7 +224,7 @@ def test_free_orientation_in_a_vertical_plane(arm):
         {"type": "arc", "center": (0.10, 0.40), "r": 0.10, "beta": -math.pi / 2,
          "phi": math.pi},
     )
-    pr = build(arm, Params(segments=segments, plane_origin=(0.0, 0.35, 0.0),
+    pr = STUDY.build(arm, Params(segments=segments, plane_origin=(0.0, 0.35, 0.0),
                            plane_e1=(1.0, 0.0, 0.0), plane_e2=(0.0, 0.0, 1.0),
                            orientation="free", n_samples=200))
     sol = pr.solution(np.array([0.2, 0.15, 0.5, 0.5, 0.1]))
@@ -254,7 +261,7 @@ def test_user_path_with_fixed_tool_heading(arm):
     """Tool down with a fixed heading (``tool_yaw`` 0.3 rad) on a user path: the decoded
     motion is on the path and holds the heading, joint 5 turning (restored from before the
     generic IK; the closed form gave 1e-12, the numerical pose IK 1e-9–1e-10)."""
-    pr = build(arm, Params(segments=TURN, tool_yaw=0.3, speeds="single", n_samples=200))
+    pr = STUDY.build(arm, Params(segments=TURN, tool_yaw=0.3, speeds="single", n_samples=200))
     assert pr.variable_names == ("V", "t_a", "t_d")
     sol = pr.solution(np.array([0.15, 0.5, 0.5]))
     mo = sol.motion
@@ -301,11 +308,11 @@ def test_bad_parameters_are_clear_errors(arm):
     with pytest.raises(ValidationError, match="objective"):
         Params(objective="speed")
     with pytest.raises(ValueError, match=r"segments\.0: tool point .* out of reach"):
-        build(arm, Params(segments=({"type": "line", "start": (1.2, 0), "end": (1.3, 0)},)))
+        STUDY.build(arm, Params(segments=({"type": "line", "start": (1.2, 0), "end": (1.3, 0)},)))
     with pytest.raises(ValueError, match=r"segments\.0: .* must jump 3\.14 rad to another IK"):
-        build(arm, Params(segments=({"type": "line", "start": (-0.2, 0), "end": (0.2, 0)},)))
+        STUDY.build(arm, Params(segments=({"type": "line", "start": (-0.2, 0), "end": (0.2, 0)},)))
     with pytest.raises(ValueError, match=r"segments\.0: .* out of reach of puma560"):
-        build(catalog.get("puma560"), Params())
+        STUDY.build(catalog.get("puma560"), Params.model_validate(STUDY.preset.params))
     with pytest.raises(ValueError, match="^robot: .*path_tracking.* needs a serial robot.* "
                                          "citedi_hexapod.* is legged"):
         legcore.run({"robot": "citedi_hexapod", "problem": {"kind": "path_tracking"}})
@@ -321,12 +328,12 @@ def test_bad_parameters_are_clear_errors(arm):
     with pytest.raises(ValidationError, match="tool_yaw"):
         Params(orientation="free", tool_yaw=0.2)
     with pytest.raises(ValueError, match="^qdd_max: 2 values for the 5 joints"):
-        build(arm, Params(qdd_max=(1.0, 2.0)))
+        STUDY.build(arm, Params(qdd_max=(1.0, 2.0)))
     with pytest.raises(ValueError, match="^rest: 3 values"):
-        build(arm, Params(rest=(0.0, 1.0, 2.0)))
+        STUDY.build(arm, Params(rest=(0.0, 1.0, 2.0)))
     slow = {"type": "line", "start": (0.0, 0.02), "end": (0.2, 0.02)}
     with pytest.raises(ValueError, match=r"segments\.0: .* even at the slowest speed"):
-        build(arm, Params(segments=(slow,), V_bounds=(0.05, 1.0)))
+        STUDY.build(arm, Params(segments=(slow,), V_bounds=(0.05, 1.0)))
 
 
 def test_evaluate_is_vectorised_and_matches_the_decoded_solution(problem):
@@ -421,3 +428,67 @@ def test_default_budget_without_the_acceleration_limit_reaches_the_seed_optimum(
     assert m["time"] < 2.948 * 1.02
     assert m["qd_use_max"] > 0.99 and m["qd_use_max"] <= 1.0 and m["tau_use_max"] <= 1.0
     assert m["qdd_use_max"] == 0.0  # no acceleration limit: nothing to use
+
+
+# ------------------------------------------------------------------ defaults on another arm
+
+
+def test_workspace_analysis_of_the_seed_arm(arm):
+    """Sampled FK: the reach from the shoulder is the arm's a2 + a3 + d5 = 1.0 m at most (and
+    nearly reached); the dexterity of the position task is σ_min(J_v) / reach; holding the tool
+    down (the 5-joint arm's roll about the tool axis is then useless) it is still positive and
+    the joint rates it implies move the tool in the plane without tilting it."""
+    from legcore.studies.arm_workspace import arm_workspace, centres, dexterity, plane_basis
+
+    ws = arm_workspace(arm)
+    assert 0.98 < ws.reach <= 1.0 + 1e-12
+    np.testing.assert_allclose(ws.shoulder, [0.0, 0.0, 0.5], atol=1e-12)
+    q = ws.q[:5]
+    Jv = kinematics.jacobian(arm, q)[:, :3]
+    np.testing.assert_allclose(ws.dexterity[:5],
+                               np.linalg.svd(Jv, compute_uv=False)[:, -1] / ws.reach, rtol=1e-9)
+    down = centres(arm, (0.0, 0.0, -1.0))
+    assert down and down[0].dexterity > 0.2
+    c = down[0]
+    np.testing.assert_allclose(kinematics.fk(arm, c.q)[:3, 2], [0.0, 0.0, -1.0], atol=1e-9)
+    B = plane_basis((0.0, 0.0, -1.0))
+    d = dexterity(arm, c.q, (0.0, 0.0, -1.0), ws.reach, B)
+    assert float(d) == pytest.approx(c.dexterity, rel=1e-12)
+    J = kinematics.jacobian(arm, c.q)
+    A = np.vstack([J[:3], J[3:5]])  # tilts about x and y: the axis is z
+    qd = np.linalg.pinv(A, rcond=1e-9) @ np.concatenate([B[:, 0], [0.0, 0.0]])
+    np.testing.assert_allclose(J[:3] @ qd, B[:, 0], atol=1e-9)  # the tool moves as asked
+    np.testing.assert_allclose(J[3:5] @ qd, 0.0, atol=1e-9)  # without tilting
+
+
+def test_defaults_on_an_arm_that_is_not_the_seeds(arm):
+    """The same 5-DOF arm under another name (no preset): seed 004's capsule scaled to 0.4 ×
+    the reach, in a plane through a well-conditioned posture, the tool down; V = 0.10 m/s ×
+    the path's length / the seed's, V_bounds (V/10, 10 V); the build follows it exactly."""
+    from legcore.robots import build_robot
+    from legcore.studies.path_tracking.defaults import SEED_PATH_LENGTH, capsule
+
+    seed = capsule(0.6)  # the seed's capsule, centred: its arcs about (±0.2, 0) m, r 0.1 m
+    for mine, ref in zip(seed, STUDY.preset.params["segments"], strict=True):
+        got = mine.model_dump()
+        for key in ("center", "start", "end"):
+            if key in got:
+                np.testing.assert_allclose(np.add(got[key], (0.0, 0.3)), ref[key], atol=1e-15)
+    other = build_robot(arm.spec.model_copy(update={"name": "my_arm"}))
+    task = STUDY.task(other, Params())
+    p = task.params
+    assert task.preset is None and p.orientation == "down"
+    assert set(task.rules) >= {"segments", "plane_origin", "plane_e1", "plane_e2", "rest", "V",
+                               "V_bounds", "orientation"}
+    across = p.segments[0].center[0] - p.segments[2].center[0] + 2 * p.segments[0].r
+    assert across == pytest.approx(0.4, abs=1e-3)  # 0.4 × the reach (1.0 m)
+    pr = STUDY.build(other, Params(n_samples=100))
+    assert p.V == pytest.approx(float(f"{0.1 * pr.path.length / SEED_PATH_LENGTH:.3g}"))
+    assert p.V_bounds == pytest.approx((p.V / 10, 10 * p.V), rel=1e-2)
+    assert pr.joints.path_error < 1e-8 and pr.rest.tolist() == pytest.approx(list(p.rest))
+    sol = pr.solution(pr.seed_x())
+    assert sol.metrics["feasible"] == 1.0 and not pr.violations(pr.seed_x())
+    with pytest.raises(ValueError, match=r"^segments\.0: tool point .* beyond its reach"):
+        STUDY.build(other, Params(plane_origin=(3.0, 0.0, 0.5), plane_e1=(1.0, 0.0, 0.0),
+                                  plane_e2=(0.0, 1.0, 0.0), orientation="down",
+                                  segments=STUDY.preset.params["segments"]))

@@ -95,7 +95,7 @@ def test_every_place_gives_the_submissions_answer(
                                                  "budget": {"generations": 1}}, headers=alice)
             accepted, field, reason = verdict
             if accepted:
-                assert r.status_code == 201, (name, kind, r.text)
+                assert r.status_code == 202, (name, kind, r.text)
                 continue
             assert r.status_code == 422, (name, kind, r.text)
             (err,) = r.json()["detail"]
