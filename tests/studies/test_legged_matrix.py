@@ -4,7 +4,9 @@ physical checks, or the refusal naming the missing capability.
 - ``swing_energy``: the foot starts and ends at the requested positions (1e-6 m, by Pinocchio
   FK of the decoded joints), the torques are Pinocchio's RNEA, and the mechanical energy is at
   least the variation of the leg's mechanical energy by the same quadrature (its
-  gravity/inertia bound).
+  gravity/inertia bound); a legged robot without ``leg`` swings its first front leg. The
+  default task (a step derived from the leg) on every matrix robot:
+  tests/studies/test_defaults_swing_energy.py.
 - ``quadruped_gait``: every foot follows its target (1e-6 m) with the stance feet on the
   ground, and each leg's energy is at least the variation of its mechanical energy (the
   ground reactions are vertical on feet that move horizontally: they do no work).
@@ -67,10 +69,12 @@ def test_swing_energy_refuses_a_seven_joint_arm(robot_spec: SpecOf) -> None:
     assert msg == "robot: swing_energy needs 2–6 actuated joints; robot panda has 7"
 
 
-def test_swing_energy_on_a_legged_robot_names_the_leg(robot_spec: SpecOf) -> None:
-    msg = refusal_message({"robot": robot_spec("go1"), "problem": {"kind": "swing_energy"}})
-    assert msg.startswith("leg: swing_energy swings one leg of the legged robot 'go1'")
-    assert "FL" in msg
+def test_swing_energy_on_a_legged_robot_takes_its_first_front_leg(robot_spec: SpecOf) -> None:
+    """Without ``leg`` a legged robot swings its first front leg, and the task says so (the runs
+    with the default task: tests/studies/test_defaults_swing_energy.py)."""
+    task = prepare({"robot": robot_spec("go1"), "problem": {"kind": "swing_energy"}}).problem.task
+    assert task is not None and task.params.leg == "FL"
+    assert task.rules["leg"].startswith("the first front leg: the hips of ['FL', 'FR'] lie ")
 
 
 HKA = {"kind": "hka", "params": {"n_samples": 8, "n_best": 3}}
@@ -86,6 +90,8 @@ def test_quadruped_gait_on_real_quadrupeds(name: str, preset: SpecOf, built_robo
     sol = r.baselines["default_step"]
     check_gait(built_robot(name), sol)
     assert set(sol.extra["ik"].values()) == {"numerical (legcore.ik.solve)"}
+    # the preset's default step (its unset fields derived from the leg length) is feasible
+    assert sol.feasible, [v.text for v in sol.violations or ()]
 
 
 @pytest.mark.parametrize("name", ["ur5", "panda", "solo12_leg"])
@@ -113,8 +119,11 @@ def test_hexapod_workspace_refuses_what_is_not_a_hexapod(
 
 
 def test_hexapod_workspace_on_a_urdf_hexapod() -> None:
-    """A parametric hexapod written as URDF (numerical FK/IK): the optimum's and the baselines'
-    motions keep the stance feet where they started (Pinocchio FK, 1e-6 m)."""
+    """A parametric hexapod written as URDF (numerical FK/IK), its pose grid given by hand
+    (used as given; the rest of the task derived from the robot — tests/studies/
+    test_defaults_hexapod.py runs hexapods with every default): the optimum is feasible (stable)
+    and its and the baselines' motions keep the stance feet where they started (Pinocchio FK,
+    1e-6 m)."""
     from legcore.studies.hexapod_workspace.robot import HexapodGeometry, hexapod_urdf
 
     spec = {"robot": {"kind": "urdf", "name": "hexapod", "legs": "auto",
@@ -128,3 +137,6 @@ def test_hexapod_workspace_on_a_urdf_hexapod() -> None:
     r = legcore.run(spec)
     checked = [check_hexapod(problem, sol) for sol in (r.best, *r.baselines.values())]
     assert set(r.baselines) == {"start", "straight_walk"} and all(checked)
+    assert problem.task is not None and problem.task.params.pose_x_extent == 0.04
+    assert "pose_x_extent" not in problem.task.rules and "theta2" in problem.task.rules
+    assert r.feasible and r.best.metrics["stable"] == 1.0

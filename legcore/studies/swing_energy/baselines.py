@@ -96,7 +96,7 @@ def _ik_via(problem: SwingEnergyProblem, p: FloatArray) -> FloatArray | None:
 
 def parabolic_via(problem: SwingEnergyProblem, height: float | None = None) -> FloatArray | None:
     """Via points (n_via, n) rad of the parabolic swing (module docstring), None if the IK fails."""
-    h = problem.params.step_height if height is None else float(height)
+    h = float(problem.params.step_height or 0.0) if height is None else float(height)
     s = np.arange(1, problem.n_via + 1) / (problem.n_via + 1)
     p = (problem.foot_start + np.outer(s, problem.foot_end - problem.foot_start)
          + np.outer(4.0 * h * s * (1.0 - s), [0.0, 0.0, 1.0]))

@@ -1,9 +1,12 @@
 """Parameters of the ``swing_energy`` study (see :mod:`legcore.studies.swing_energy.problem`).
 
-Every default is seed 000's setting (Calderón, Bedolla & Szwedowicz 2015) and says so; the
-per-joint defaults (``w_d``, ``w_a``, ``search_range``, the start/end configurations) are seed
-000's for its 3-joint leg, and for a leg of another number of joints the generic values of
-:meth:`Params.per_joint` apply (a user-given per-joint value must have one entry per joint).
+A default is either robot-independent (seed 000's setting: the swing time, via points, grid,
+criterion weights, …) or ``None``: *derived from the robot* by
+:func:`legcore.studies.swing_energy.defaults.derive` — the leg, its start and end (a step in
+body axes from a nominal stance), the link weights, the search range, the parabolic baseline's
+apex and the obstacle box's size. Seed 000's own values of those live in its preset
+(:mod:`legcore.studies.swing_energy.preset`), applied on its catalog robot ``calderon_leg``.
+A user-given per-joint value must have one entry per joint.
 """
 
 from __future__ import annotations
@@ -17,9 +20,6 @@ from legcore.studies.study import StudyParams
 
 __all__ = [
     "BASELINES",
-    "DEFAULT_END_STEPS",
-    "DEFAULT_END_STEPS_OBSTACLE",
-    "DEFAULT_START_STEPS",
     "GENERIC_SEARCH_RANGE",
     "RESOLUTION",
     "BaselineName",
@@ -30,14 +30,7 @@ __all__ = [
 
 #: Seed 000's control resolution (rad) — genes are integer multiples of it.
 RESOLUTION = 0.00174
-#: Seed 000's derived start/end configurations of its 3-joint leg, in resolution steps (see
-#: the study's docstring); the end of case 2 (obstacle) keeps joint 3 where it started
-#: (Tables 4-5: Solteiro's θ3 = 0).
-DEFAULT_START_STEPS = (-185, 384, -782)
-DEFAULT_END_STEPS = (186, 384, -780)
-DEFAULT_END_STEPS_OBSTACLE = (186, 384, -782)
-#: Seed 000's per-joint search range (rad) of its 3-joint leg, and the one of other legs.
-SEED_SEARCH_RANGE = (0.05, 0.3, 0.4)
+#: The search range (rad per joint) of a leg without a given one.
 GENERIC_SEARCH_RANGE = 0.3
 
 #: Baseline name → (criterion it optimises, reference in seed 000).
@@ -66,7 +59,7 @@ LegName = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-
 
 
 class Obstacle(BaseModel):
-    """A box on the ground, mid-stride (seed 000 case 2: 60 × 40 × 26 mm).
+    """A box on the ground, mid-stride (seed 000 case 2: 60 × 40 × 26 mm on its 0.29 m leg).
 
     ``length`` along the step, ``width`` across it, ``height`` (m). Its centre lies on the
     start→end foot chord at the fraction ``along`` (0.5: "halfway between the initial and final
@@ -74,15 +67,20 @@ class Obstacle(BaseModel):
     direction; its base is on the ground. The box is axis-aligned: its length is laid along the
     world axis (x or y) nearest the step direction.
     ``margin`` (m): the links and foot must stay this far out of it (link thickness).
+    A size left out (None) is seed 000's scaled by the leg's length: × L / L₀ (``derive``).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
-    length: float = Field(default=0.060, gt=0.0, le=2.0, description="m, seed 000's value")
-    width: float = Field(default=0.040, gt=0.0, le=2.0, description="m, seed 000's value")
-    height: float = Field(default=0.026, gt=0.0, le=2.0, description="m, seed 000's value")
+    length: float | None = Field(default=None, gt=0.0, le=2.0,
+                                 description="m; None: seed 000's 0.060 m × L / L₀")
+    width: float | None = Field(default=None, gt=0.0, le=2.0,
+                                description="m; None: seed 000's 0.040 m × L / L₀")
+    height: float | None = Field(default=None, gt=0.0, le=2.0,
+                                 description="m; None: seed 000's 0.026 m × L / L₀")
     along: float = Field(default=0.5, ge=0.0, le=1.0)
     lateral: float = Field(default=0.0, ge=-2.0, le=2.0)
-    margin: float = Field(default=0.002, ge=0.0, le=0.5, description="m, seed 000's value")
+    margin: float | None = Field(default=None, ge=0.0, le=0.5,
+                                 description="m; None: seed 000's 0.002 m × L / L₀")
 
 
 class BoxSpec(BaseModel):
@@ -104,31 +102,45 @@ class BoxSpec(BaseModel):
 
 
 class Params(StudyParams):
-    """Parameters of the ``swing_energy`` study; defaults are seed 000's settings (s, rad, m).
+    """Parameters of the ``swing_energy`` study (s, rad, m). A ``None`` default is derived from
+    the robot (:mod:`legcore.studies.swing_energy.defaults`, the rule of each value in the job's
+    ``task.rules``); the other defaults are seed 000's robot-independent settings. On seed 000's
+    leg ``calderon_leg`` its preset gives the paper's values.
 
-    - ``leg``: the leg that swings, for a legged robot (its name, e.g. ``LF``); a serial robot
-      is the leg itself. ``foot_frame``: the frame (link) of the chain that is the foot, when
-      it is not the robot's tool/end frame (it must hang from the last joint).
+    - ``leg``: the leg that swings, for a legged robot (its name, e.g. ``LF``; None: its first
+      front leg); a serial robot is the leg itself. ``foot_frame``: the frame (link) of the
+      chain that is the foot, when it is not the robot's tool/end frame (it must hang from the
+      last joint).
     - ``T`` swing time (3 s), ``n_via`` intermediate via points (10), ``dt`` sampling step
       (0.01 s; T must be a whole number of steps), ``resolution`` control resolution (0.00174).
     - ``q_start``/``q_end`` (rad, one value per joint) or ``foot_start``/``foot_end`` (m, in
-      the leg's base frame — the hip, body axes, for a leg of a legged robot; IK branch nearest
-      the default start posture, then the start) replace seed 000's derived start/end (which
-      exist for 3-joint legs only). They are rounded onto the control grid unless
-      ``exact_ends`` (then the foot starts and ends exactly where asked, to 1e-9 m).
-    - ``w1``, ``w2`` criterion weights (5, 5); ``w_d``, ``w_a`` link weights (seed 000's
-      (0.25, 0.5, 0.25) for 3 joints, else 1/n each); ``ratio_eps`` ε of the ratios in
+      the leg's base frame — the hip, body axes, for a leg of a legged robot; IK on the leg's
+      own knee branch, then from the start). None: a step in body axes — from half a step
+      behind a nominal stance to half a step ahead of it (``derive``). Given ends are rounded
+      onto the control grid unless ``exact_ends`` (then the foot starts and ends exactly where
+      asked, to 1e-9 m); None: exact when an end is derived, rounded when both are given.
+    - ``w1``, ``w2`` criterion weights (5, 5); ``w_d``, ``w_a`` link weights (None: 1/n each;
+      seed 000's (0.25, 0.5, 0.25) in its preset); ``ratio_eps`` ε of the ratios in
       resolution steps (1; 0 = eqs 2/5 with 0/0 := 1).
     - ``obstacle``: False (flat ground, case 1), True (the seed's 60 × 40 × 26 mm box
-      mid-stride, case 2) or an :class:`Obstacle`; ``obstacles``: more boxes, placed by
-      coordinates (:class:`BoxSpec`). ``ground``/``ground_tolerance``: keep the leg above the
-      ground (1 mm tolerance); ``ground_height``: its z (m, leg base frame; default the lower
-      of the start and end feet, as seed 000).
-    - ``encoding``, ``search_range`` (per joint, rad: seed 000's (0.05, 0.3, 0.4) for 3 joints,
-      else 0.3 each), ``dead_band`` (× search_range), ``lift_only``: the gene coding.
-    - ``step_height``: apex of the parabolic baseline (0.065 m). ``baselines``: which baselines
-      to compute (all five); ``baseline_generations``/``baseline_pop_size``/``baseline_seed``:
-      the GA budget and seed of the GA baselines (100 × 100, seed 0).
+      mid-stride, case 2, scaled to the leg) or an :class:`Obstacle`; ``obstacles``: more
+      boxes, placed by coordinates (:class:`BoxSpec`). ``ground``/``ground_tolerance``: keep the
+      leg above the ground (1 mm tolerance); ``ground_height``: its z (m, leg base frame;
+      default the lower of the start and end feet, as seed 000).
+    - ``encoding``, ``tube``, ``search_range`` (per joint, rad; None: 0.3 each; seed 000's
+      (0.05, 0.3, 0.4) in its preset), ``dead_band`` (× search_range), ``lift_only``: the gene
+      coding. ``tube``: the motion the search is centred on (all-zero genes): ``coordinated``
+      (seed 000) or ``shortest`` (the shortest foot path that clears the ground and obstacles:
+      a feasible swing; the coordinated motion when no path raised by up to 50 mm does); None:
+      coordinated unless the coordinated motion violates the ground or an obstacle (a leg's
+      forward step, whose joint-space straight line dips the foot), then shortest.
+      ``lift_only`` None: true around the coordinated motion (seed 000), false around the
+      shortest path.
+    - ``step_height``: apex of the parabolic baseline (m; None: 0.2 L, the leg's stretched
+      length below the hip; seed 000's 0.065 m in its preset).
+      ``baselines``: which baselines to compute (all five);
+      ``baseline_generations``/``baseline_pop_size``/``baseline_seed``: the GA budget and seed
+      of the GA baselines (100 × 100, seed 0).
     """
 
     kind: Literal["swing_energy"] = "swing_energy"
@@ -142,11 +154,11 @@ class Params(StudyParams):
     q_end: PerJoint | None = None
     foot_start: Vec3 | None = None
     foot_end: Vec3 | None = None
-    exact_ends: bool = False
+    exact_ends: bool | None = None
     w1: float = Field(default=5.0, ge=0.0, le=1e3)
     w2: float = Field(default=5.0, ge=0.0, le=1e3)
-    w_d: PerJoint = (0.25, 0.5, 0.25)
-    w_a: PerJoint = (0.25, 0.5, 0.25)
+    w_d: PerJoint | None = None
+    w_a: PerJoint | None = None
     ratio_eps: float = Field(default=1.0, ge=0.0, le=1e3, description="ε in resolution steps")
     obstacle: bool | Obstacle = False
     obstacles: tuple[BoxSpec, ...] = Field(default=(), max_length=20)
@@ -154,10 +166,12 @@ class Params(StudyParams):
     ground_height: float | None = Field(default=None, ge=-10.0, le=10.0, description="m")
     ground_tolerance: float = Field(default=0.001, ge=0.0, le=1.0, description="m")
     encoding: Literal["deviation", "absolute"] = "deviation"
-    search_range: PerJoint = SEED_SEARCH_RANGE
+    tube: Literal["coordinated", "shortest"] | None = None
+    search_range: PerJoint | None = None
     dead_band: float = Field(default=2.0, ge=0.0, le=100.0, description="× search_range")
-    lift_only: bool = True
-    step_height: float = Field(default=0.065, ge=0.0, le=1.0, description="m")
+    lift_only: bool | None = None
+    step_height: float | None = Field(default=None, ge=0.0, le=1.0,
+                                      description="m; None: 0.2 × the leg's length")
     baselines: tuple[BaselineName, ...] = (
         "calderon2008_parabolic",
         "tian_collins2004_min_displacement",
@@ -171,12 +185,13 @@ class Params(StudyParams):
 
     @model_validator(mode="after")
     def _consistent(self) -> Params:
-        if any(not math.isfinite(v) or v < 0.0 or v > 2 * math.pi for v in self.search_range):
+        if self.search_range is not None and any(
+                not math.isfinite(v) or v < 0.0 or v > 2 * math.pi for v in self.search_range):
             raise ValueError(f"search_range: per-joint ranges must be in [0, 2π] rad, "
                              f"got {self.search_range}")
         for name in ("w_d", "w_a"):
             w = getattr(self, name)
-            if any(not math.isfinite(v) or v < 0.0 for v in w):
+            if w is not None and any(not math.isfinite(v) or v < 0.0 for v in w):
                 raise ValueError(f"{name}: link weights must be finite and >= 0, got {w}")
         if self.w1 + self.w2 <= 0.0:
             raise ValueError("w1, w2: at least one criterion weight must be > 0")
@@ -212,15 +227,12 @@ class Params(StudyParams):
 
     def per_joint(self, name: str, n: int) -> tuple[float, ...]:
         """The per-joint parameter ``name`` (``w_d``, ``w_a``, ``search_range``) for a leg of
-        ``n`` joints: as given when it has n values; its default when left out — seed 000's
-        for 3 joints, else 1/n per joint (weights) or 0.3 rad (search range). ``ValueError``
-        naming the field when a given value has another length."""
-        value: tuple[float, ...] = getattr(self, name)
-        if len(value) == n:
-            return value
-        if name in self.model_fields_set:
+        ``n`` joints: as given (it must have n values: ``ValueError`` naming the field); when
+        left out (None), 1/n per joint (weights) or 0.3 rad (search range)."""
+        value: tuple[float, ...] | None = getattr(self, name)
+        if value is None:
+            return (GENERIC_SEARCH_RANGE,) * n if name == "search_range" else (1.0 / n,) * n
+        if len(value) != n:
             raise ValueError(f"{name}: {len(value)} values for a leg of {n} joints; give one "
                              "per joint")
-        if name == "search_range":
-            return (GENERIC_SEARCH_RANGE,) * n
-        return (1.0 / n,) * n
+        return value

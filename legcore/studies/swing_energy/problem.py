@@ -3,9 +3,12 @@
 Calderón, Bedolla & Szwedowicz (2015). One leg swings freely (open chain) from a start to an
 end configuration in ``T`` = 3 s. The seed's leg is ``calderon_leg`` (3 DOF: hip yaw + two
 pitch joints, seed 000 Table 1); the study runs on any leg chain of 2–6 revolute joints — a
-serial leg (or arm), or one leg of a legged robot (``leg``), its foot the chain's end frame or
-the frame named by ``foot_frame`` (:mod:`legcore.studies.swing_energy.setup`). Every default is
-seed 000's setting (:mod:`legcore.studies.swing_energy.params`). See ``docs/studies.md (seed
+serial leg, or one leg of a legged robot (``leg``), its foot the chain's end frame or the frame
+named by ``foot_frame`` (:mod:`legcore.studies.swing_energy.setup`). What depends on the leg
+(which leg, its start and end — a step in body axes from a nominal stance —, the link weights,
+the search range, the baseline's apex, the obstacle's size) is derived from it
+(:mod:`legcore.studies.swing_energy.defaults`); on seed 000's own leg the paper's values come
+from its preset (:mod:`legcore.studies.swing_energy.preset`). See ``docs/studies.md (seed
 000)`` for the paper's tables beside ours.
 
 Genes
@@ -26,6 +29,16 @@ Genes
     - ``"absolute"``: the gene *is* the via-point angle, ``v = k`` steps, in the tube
       ``c ± W`` around the coordinated motion (one-sided for the lifting joints with
       ``lift_only``) — the seed's literal coding.
+
+    The tube's centre ``c`` (``tube``) is the coordinated motion (seed 000), or the shortest
+    foot path that clears the ground and obstacles (the Shankar & Kaur baseline's via points,
+    feasible by construction): the default when the coordinated motion itself violates them — a
+    leg's forward step, whose joint-space straight line dips the foot into the ground (14, 26
+    and 18 mm on the derived steps of Solo12, ANYmal B and Go1). Around the coordinated motion
+    seed 000's GA (100 × 100, penalty 300 /m) ends infeasible on 3 of those 9 runs (3 seeds ×
+    3 legs) and needs 4–48 generations on the others; around the shortest path it is feasible
+    from generation 2 on all 9. ``lift_only`` then defaults to false (a lowering deviation is
+    refused by the ground constraint, not by the coding).
 
     Why "deviation": with absolute genes the seed's GA (fresh-value mutation, one-gene blend)
     cannot make a joint exactly still — f_d and f_a reward stillness only when all ten genes of
@@ -83,7 +96,7 @@ Constraints (G ≤ 0)
     feasible (hip-pitch) lift and never finds the knee lift the score prefers.
 
 Start and end of seed 000's leg (derived; the seed gives neither, see the docs for the fit;
-the defaults of ``q_start``/``q_end`` for a 3-joint leg)
+its preset's ``q_start``/``q_end``)
     start = (−185, 384, −782) steps, end = (186, 384, −780) steps of 0.00174 rad, i.e.
     q_start = (−0.3219, 0.6682, −1.3607) rad, q_end = (0.3236, 0.6682, −1.3572) rad.
     Joint 1 travels 371 steps = 0.6455 rad (Tables 2–5: 0.6458 = 37.0°); joint 3 differs by
@@ -117,7 +130,8 @@ from legcore.problems.base import Problem
 from legcore.robots.capabilities import Needs
 from legcore.robots.legged import LeggedRobot
 from legcore.robots.model import Robot
-from legcore.studies.study import Box, Motion, Solution, Study, StudyProblem
+from legcore.studies.study import Box, Motion, Solution, Study, StudyProblem, Violation
+from legcore.studies.swing_energy.defaults import derive, ik_reference
 from legcore.studies.swing_energy.geometry import (
     chain_clearance,
     point_box_distance,
@@ -126,23 +140,18 @@ from legcore.studies.swing_energy.geometry import (
 )
 from legcore.studies.swing_energy.params import (
     BASELINES,
-    DEFAULT_END_STEPS,
-    DEFAULT_END_STEPS_OBSTACLE,
-    DEFAULT_START_STEPS,
     RESOLUTION,
     BoxSpec,
     Obstacle,
     Params,
 )
+from legcore.studies.swing_energy.preset import PRESET
 from legcore.studies.swing_energy.setup import boxes, configuration, swing_leg
 from legcore.trajectories import ViaPointSpline, time_grid
 
 __all__ = [
     "BASELINES",
     "CRITERIA",
-    "DEFAULT_END_STEPS",
-    "DEFAULT_END_STEPS_OBSTACLE",
-    "DEFAULT_START_STEPS",
     "RESOLUTION",
     "STUDY",
     "BoxSpec",
@@ -169,7 +178,9 @@ class SwingEnergyProblem(StudyProblem):
     Args:
         robot: a serial leg of 2–6 revolute joints (``calderon_leg`` by default), or a legged
             robot whose leg ``params.leg`` swings.
-        params: the study :class:`Params`.
+        params: the study :class:`Params`; fields left to the robot (None) are derived first
+            (``STUDY.task``: the preset on seed 000's leg, then
+            :func:`~legcore.studies.swing_energy.defaults.derive`).
         criterion: what F is — ``"score"`` (F = −score, the seed's GA) or a baseline criterion
             ``"theta_total"`` (rad), ``"foot_distance"`` (m), ``"energy"`` (J),
             ``"multi_criteria"`` (dimensionless, see ``swing_energy_baselines``).
@@ -189,6 +200,8 @@ class SwingEnergyProblem(StudyProblem):
         criterion: str = "score",
         refs: dict[str, float] | None = None,
     ) -> None:
+        if _incomplete(robot, params):
+            params = STUDY.task(robot, params).params
         self.source = robot  # the robot as given (a legged robot, or the serial leg)
         self.robot_name = str(getattr(robot, "name", ""))
         #: the leg's hip (4×4, body frame) when it is a leg of a legged robot whose leg frames
@@ -224,16 +237,14 @@ class SwingEnergyProblem(StudyProblem):
         res = float(params.resolution)
         self.res = res
 
-        default_start = np.asarray(DEFAULT_START_STEPS, dtype=float) * RESOLUTION
-        ref = default_start if n == 3 and robot.within_limits(default_start) else robot.home
-        exact = params.exact_ends
+        # a given foot position is solved on the leg's own knee branch (defaults.ik_reference)
+        ref = (ik_reference(self.source, params, robot) if params.foot_start is not None
+               else robot.home)
+        exact = bool(params.exact_ends)
         self.q_start, self.start_steps = configuration(
-            robot, "start", params.q_start, params.foot_start, DEFAULT_START_STEPS, ref, res,
-            exact)
+            robot, "start", params.q_start, params.foot_start, ref, res, exact)
         self.q_end, self.end_steps = configuration(
-            robot, "end", params.q_end, params.foot_end,
-            DEFAULT_END_STEPS if params.box is None else DEFAULT_END_STEPS_OBSTACLE,
-            self.q_start, res, exact)
+            robot, "end", params.q_end, params.foot_end, self.q_start, res, exact)
         self.w_d = np.asarray(params.per_joint("w_d", n), dtype=float)
         self.w_a = np.asarray(params.per_joint("w_a", n), dtype=float)
         search_range = np.asarray(params.per_joint("search_range", n), dtype=float)
@@ -276,6 +287,11 @@ class SwingEnergyProblem(StudyProblem):
         self.dead_steps = np.rint(params.dead_band * self.range_steps).astype(np.int64)
         self.steps_min = np.ceil(robot.q_min / res - 1e-9).astype(np.int64)
         self.steps_max = np.floor(robot.q_max / res + 1e-9).astype(np.int64)
+        # the tube's centre (params.tube): the coordinated motion for now; a swing that clears
+        # the ground is decoded by this problem, so it is set once the problem is built
+        self.centre_steps = self.coord_steps
+        #: what the tube is centred on: "coordinated" or "shortest"
+        self.tube = "coordinated"
         lo, hi = self._gene_box()
         n_constr = int(params.ground) + int(bool(self.boxes))
         self.constraint_names = tuple(
@@ -287,9 +303,29 @@ class SwingEnergyProblem(StudyProblem):
                          resolution=res, name=f"swing_energy[{criterion}]")
         (qdd_c,) = self.trajectories(self.coordinated_x()[None], (2,))
         self.acc_coordinated = np.max(np.abs(qdd_c[0]), axis=0)
+        if params.tube == "shortest":
+            self._centre_on_shortest()
         # load the evaluation's numba kernels now: the first evaluate() is measured by
         # legcore.memory (tracemalloc) and must see arrays, not numba's cache loader
         self._evaluate(self.coordinated_x()[None])
+
+    def _centre_on_shortest(self) -> None:
+        """Centre the search tube on the shortest foot path that the decoded trajectory keeps
+        feasible (:func:`~legcore.studies.swing_energy.baselines.min_distance_via`, on the grid)
+        and rebuild the gene bounds; when there is none (no path raised by up to 50 mm clears
+        them) the tube stays around the coordinated motion (``tube`` says which)."""
+        from legcore.studies.swing_energy.baselines import min_distance_via
+
+        via = min_distance_via(self)
+        if via is None:  # none within 50 mm: the search stays around the coordinated motion
+            return
+        self.tube = "shortest"
+        self.centre_steps = np.rint(via / self.res).astype(np.int64)
+        lo, hi = self._gene_box()
+        self.xl = lo.ravel() * self.res
+        self.xu = hi.ravel() * self.res
+        self.xl.flags.writeable = False
+        self.xu.flags.writeable = False
 
     # ------------------------------------------------------------------ trajectories
     def _lift_signs(self) -> NDArray[np.int64]:
@@ -303,10 +339,10 @@ class SwingEnergyProblem(StudyProblem):
         p = self.params
         shape = (self.n_via, self.n_joints)
         W = np.broadcast_to(self.range_steps, shape)
-        one_sided = np.broadcast_to((self.lift_sign != 0) & p.lift_only, shape)
+        one_sided = np.broadcast_to((self.lift_sign != 0) & bool(p.lift_only), shape)
         sgn = np.broadcast_to(np.where(self.lift_sign == 0, 1, self.lift_sign), shape)
         if p.encoding == "absolute":
-            c = self.coord_steps
+            c = self.centre_steps
             lo = np.where(one_sided & (sgn > 0), c, c - W)
             hi = np.where(one_sided & (sgn < 0), c, c + W)
             lo = np.clip(lo, self.steps_min, self.steps_max)
@@ -318,24 +354,27 @@ class SwingEnergyProblem(StudyProblem):
         return lo, hi
 
     def free_start(self) -> tuple[str, FloatArray] | None:
-        """``deviation`` coding: all-zero genes decode to the coordinated motion, a solution the
-        coding gives without search (random genes fall in its dead band with probability ⅔)."""
+        """``deviation`` coding: all-zero genes decode to the tube's centre (the coordinated
+        motion, or the shortest foot path), a solution the coding gives without search (random
+        genes fall in its dead band with probability ⅔)."""
         if self.params.encoding == "absolute":
             return None
-        return "the coordinated motion (all genes 0)", np.zeros(self.n_var)
+        what = "shortest foot path" if self.tube == "shortest" else "coordinated motion"
+        return f"the {what} (all genes 0)", np.zeros(self.n_var)
 
     def via_steps(self, X: FloatArray) -> NDArray[np.int64]:
         """Intermediate via points (B, n_via, n) in resolution steps of decision vectors X.
 
-        ``absolute``: the gene itself. ``deviation``: the coordinated via point plus the gene's
-        excess over the dead band, ``sign(g) · max(|g| − D, 0)``; clipped to the joint limits.
+        ``absolute``: the gene itself. ``deviation``: the tube's centre (the coordinated via
+        point, or the shortest foot path's) plus the gene's excess over the dead band,
+        ``sign(g) · max(|g| − D, 0)``; clipped to the joint limits.
         """
         G = np.rint(np.asarray(X, dtype=float).reshape(-1, self.n_via, self.n_joints) / self.res)
         G = G.astype(np.int64)
         if self.params.encoding == "absolute":
             V = G
         else:
-            V = self.coord_steps + np.sign(G) * np.maximum(np.abs(G) - self.dead_steps, 0)
+            V = self.centre_steps + np.sign(G) * np.maximum(np.abs(G) - self.dead_steps, 0)
         return np.clip(V, self.steps_min, self.steps_max)
 
     def encode(self, via: FloatArray) -> FloatArray:
@@ -346,7 +385,7 @@ class SwingEnergyProblem(StudyProblem):
         if self.params.encoding == "absolute":
             G = V
         else:
-            d = V - self.coord_steps
+            d = V - self.centre_steps
             G = np.where(d == 0, 0, d + np.sign(d) * self.dead_steps)
         return (G * self.res).ravel()
 
@@ -469,6 +508,26 @@ class SwingEnergyProblem(StudyProblem):
         if self.boxes:
             cols.append(depth)
         return np.stack(cols, axis=1)
+
+    def violations(self, x: FloatArray) -> tuple[Violation, ...]:
+        """What ``x`` violates, in metres: ``ground`` (amount: how far the lowest joint or the
+        foot dips below the ground beyond its tolerance; the text says the whole dip) and
+        ``obstacle`` (how deep a link segment enters a box grown by its margin)."""
+        _, G = self.evaluate(np.asarray(x, dtype=float)[None, :])
+        if G is None:
+            return ()
+        out = []
+        for name, g in zip(self.constraint_names, G[0], strict=True):
+            if g <= 0.0:
+                continue
+            if name == "ground":
+                tol = self.params.ground_tolerance
+                text = (f"the leg dips {g + tol:.3g} m below the ground (z = "
+                        f"{self.z_ground:.4g} m): {g:.3g} m more than its {tol:.3g} m tolerance")
+            else:
+                text = f"a link enters an obstacle box (grown by its margin) {g:.3g} m deep"
+            out.append(Violation(str(name), float(g), "m", text))
+        return tuple(out)
 
     # ------------------------------------------------------------------ decoding
     def solution(self, x: FloatArray, label: str | None = None) -> Solution:
@@ -635,6 +694,7 @@ class SwingEnergyProblem(StudyProblem):
             "obstacles": [{"center": list(b.center), "half_size": list(b.half_size),
                            "margin": m} for b, m in zip(self.boxes, self.margins, strict=True)],
             "leg": self.label,
+            "tube": self.tube,
             "energy_best": best_E,
             "energy_baselines": energies,
         }
@@ -674,6 +734,20 @@ def _joint_names(robot: Robot) -> tuple[str, ...]:
     return tuple(names) if len(names) == robot.nq else tuple(f"q{i + 1}" for i in range(robot.nq))
 
 
+def _incomplete(robot: Any, params: Params) -> bool:
+    """True when ``params`` leaves a robot-relative field to the robot (None)."""
+    box = params.box
+    return (
+        (isinstance(robot, LeggedRobot) and params.leg is None)
+        or any(getattr(params, k) is None
+               for k in ("w_d", "w_a", "search_range", "step_height", "exact_ends", "tube",
+                         "lift_only"))
+        or (params.q_start is None and params.foot_start is None)
+        or (params.q_end is None and params.foot_end is None)
+        or (box is not None and None in (box.length, box.width, box.height, box.margin))
+    )
+
+
 def build(robot: Any, params: Any) -> SwingEnergyProblem:
     """The study's problem for ``robot`` (a serial leg, or a legged robot with ``params.leg``)
     and ``params`` (:class:`Params`)."""
@@ -696,13 +770,17 @@ STUDY = Study(
     default_generations=100,
     build=build,
     robot_kinds=("serial", "legged"),
+    derive=derive,
+    preset=PRESET,
     needs=(
         Needs(serial=True, min_joints=2, max_joints=6, revolute=True),
         Needs(legged=True, leg_joints=(2, 6), revolute=True),
     ),
     description=(
         "One leg (a serial chain of 2-6 revolute joints, or one leg of a legged robot: "
-        "problem.leg) swings from a start to an end foot position or configuration through "
+        "problem.leg, by default its first front leg) swings one step forward in body axes "
+        "(from half a step behind a nominal stance to half a step ahead, scaled to the leg's "
+        "length) or from a given start to a given end foot position or configuration, through "
         "joint via points on a control grid; the GA maximises seed 000's coordination score "
         "(or a baseline's criterion) with the foot and links above the ground and clear of "
         "box obstacles. Reports the mechanical energy and seed 000's per-joint table."

@@ -7,7 +7,7 @@ start and end configurations, and the obstacle boxes (see
   the chain's tool frame is moved to that frame (it must hang from the last joint).
 - :func:`configuration` — a start/end configuration from joint values or a foot position (IK:
   the closed form where the chain has one, :func:`legcore.ik.solve` otherwise), checked against
-  the joint limits.
+  the joint limits (the defaults of both: :mod:`legcore.studies.swing_energy.defaults`).
 - :func:`boxes` — the mid-stride obstacle of seed 000 plus the user's boxes.
 """
 
@@ -81,7 +81,6 @@ def configuration(
     which: str,
     q: tuple[float, ...] | None,
     foot: tuple[float, float, float] | None,
-    default_steps: tuple[int, ...] | None,
     reference: FloatArray,
     res: float,
     exact: bool,
@@ -89,9 +88,9 @@ def configuration(
     """A start/end configuration: ``(q (n,) rad, its grid steps (n,))``.
 
     ``q`` (joint values) or ``foot`` (a foot position in the leg base frame, m; solved by
-    :func:`legcore.ik.solve` on the branch nearest ``reference``) or, when neither is given,
-    ``default_steps`` (seed 000's, for 3 joints). Rounded onto the grid of ``res`` unless
-    ``exact``. ``ValueError`` naming ``q_<which>`` / ``foot_<which>``.
+    :func:`legcore.ik.solve` on the branch nearest ``reference``); one of them must be given
+    (``derive`` fills them). Rounded onto the grid of ``res`` unless ``exact``. ``ValueError``
+    naming ``q_<which>`` / ``foot_<which>``.
     """
     n = robot.nq
     field = f"q_{which}" if foot is None else f"foot_{which}"
@@ -106,11 +105,8 @@ def configuration(
         if len(q) != n:
             raise ValueError(f"q_{which}: {len(q)} values for a leg of {n} joints")
         qq = np.asarray(q, dtype=float)
-    elif default_steps is not None and len(default_steps) == n:
-        qq = np.asarray(default_steps, dtype=float) * res
     else:
-        raise ValueError(f"q_{which}: give q_{which} or foot_{which} for this {n}-joint leg "
-                         f"(the default is seed 000's 3-joint posture)")
+        raise ValueError(f"q_{which}: give q_{which} or foot_{which} for this {n}-joint leg")
     steps = np.rint(qq / res).astype(np.int64)
     if not exact:
         qq = steps * res
@@ -132,6 +128,10 @@ def boxes(
     out: list[Box] = []
     margins: list[float] = []
     if ob is not None:
+        if ob.length is None or ob.width is None or ob.height is None or ob.margin is None:
+            raise ValueError("obstacle: its size is left to the leg; derive it first "
+                             "(legcore.studies.swing_energy.defaults.derive)")
+        length, width, height = ob.length, ob.width, ob.height
         chord = foot_end - foot_start
         heading = np.array([chord[0], chord[1], 0.0])
         n = float(np.linalg.norm(heading))
@@ -141,11 +141,11 @@ def boxes(
         heading /= n
         left = np.array([-heading[1], heading[0], 0.0])
         c = foot_start + ob.along * chord + ob.lateral * left
-        c[2] = z_ground + 0.5 * ob.height
+        c[2] = z_ground + 0.5 * height
         along_x = abs(heading[0]) >= abs(heading[1])
-        half = (ob.length / 2, ob.width / 2) if along_x else (ob.width / 2, ob.length / 2)
+        half = (length / 2, width / 2) if along_x else (width / 2, length / 2)
         out.append(Box(center=(float(c[0]), float(c[1]), float(c[2])),
-                       half_size=(float(half[0]), float(half[1]), ob.height / 2)))
+                       half_size=(float(half[0]), float(half[1]), height / 2)))
         margins.append(float(ob.margin))
     for b in extra:
         out.append(Box(center=tuple(float(v) for v in b.center),  # type: ignore[arg-type]

@@ -30,9 +30,8 @@ from legcore.studies.swing_energy.geometry import (
     segment_box_depth,
     via_basis,
 )
+from legcore.studies.swing_energy.preset import DEFAULT_END_STEPS, DEFAULT_START_STEPS
 from legcore.studies.swing_energy.problem import (
-    DEFAULT_END_STEPS,
-    DEFAULT_START_STEPS,
     RESOLUTION,
     Params,
     SwingEnergyProblem,
@@ -216,15 +215,16 @@ def test_params_are_validated_with_the_field_named() -> None:
         _problem(q_end=(0.0, 4.0, 0.0))
     with pytest.raises(ValueError, match="foot_end"):
         _problem(foot_end=(1.0, 0.0, 0.0))
-    # a 6-joint arm may swing (any chain of 2-6 joints), but seed 000's start is for 3 joints
-    with pytest.raises(ValueError, match="^q_start: give q_start or foot_start"):
+    # a 6-joint arm may swing between given ends (any chain of 2-6 joints); without them it is
+    # refused up front: its end stands above its base, there is no stance to step from
+    with pytest.raises(ValueError, match="^foot_start: puma560 is an arm, not a leg: 6 joints"):
         build(catalog.get("puma560"), Params())
     seven = {"kind": "dh", "name": "seven", "joints": [{"a": 0.1}] * 7}
     with pytest.raises(ValueError, match="^robot: swing_energy needs 2–6 actuated joints; "
                                          "robot seven has 7"):
         get_study("swing_energy").build(build_robot(seven), Params())
-    with pytest.raises(ValueError, match="robot"):
-        legcore.run({"robot": "citedi_hexapod", "problem": {"kind": "swing_energy"}})
+    with pytest.raises(ValueError, match="^robot: swing_energy needs the leg's base frame"):
+        legcore.run({"robot": "animatronic_quadruped", "problem": {"kind": "swing_energy"}})
 
 
 def test_foot_positions_and_user_configurations() -> None:
