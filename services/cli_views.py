@@ -8,10 +8,20 @@ from typing import Any
 
 from rich import box
 from rich.table import Table
+from rich.text import Text
 
 from services.display import best_text, fmt, objective_names_for
+from services.verdict import violations_text
 
-__all__ = ["job_block", "job_title", "jobs_table", "progress_text", "short", "sweep_table"]
+__all__ = [
+    "job_block",
+    "job_title",
+    "jobs_table",
+    "progress_text",
+    "short",
+    "status_text",
+    "sweep_table",
+]
 
 
 def short(job_id: str) -> str:
@@ -44,6 +54,19 @@ def _seconds(a: str | None, b: str | None) -> str:
     return f" ({dt:.1f} s)"
 
 
+def status_text(job: dict[str, Any], suffix: str = "") -> Text:
+    """The job's status, ``succeeded (infeasible)`` in red when its optimum violates a
+    constraint (the run completed; the answer is infeasible), ``succeeded`` in green when it
+    was checked feasible."""
+    status = str(job.get("status", ""))
+    feasible = job.get("feasible")
+    if status == "succeeded" and feasible is False:
+        return Text(f"succeeded (infeasible){suffix}", style="bold red")
+    if status == "succeeded" and feasible is True:
+        return Text(f"succeeded{suffix}", style="green")
+    return Text(status + suffix)
+
+
 def progress_text(job: dict[str, Any]) -> str:
     g, total = job.get("generation", 0), job.get("total_generations", 0)
     return f"{g}/{total}" if total else str(g)
@@ -62,8 +85,13 @@ def job_block(job: dict[str, Any]) -> Table:
     t.add_row("kind", kind)
     t.add_row("robot", _robot(spec))
     t.add_row("optimiser", _optimiser(job))
-    state = job["status"] + (" (cancel requested)" if job.get("cancel_requested") else "")
-    t.add_row("status", f"{state}, attempt {job.get('attempts', 0)}")
+    cancel = " (cancel requested)" if job.get("cancel_requested") else ""
+    t.add_row("status", status_text(job, f"{cancel}, attempt {job.get('attempts', 0)}"))
+    if job.get("status") == "succeeded" and job.get("feasible") is False:
+        what = violations_text(job.get("violations")) or "the optimum violates a constraint"
+        t.add_row("verdict", Text(f"INFEASIBLE: {what}", style="bold red"))
+    elif job.get("status") == "succeeded" and job.get("feasible") is True:
+        t.add_row("verdict", Text("feasible: the optimum meets every constraint", style="green"))
     pct = f" ({100 * job.get('progress', 0):.0f} %)" if job.get("total_generations") else ""
     t.add_row("progress", f"{progress_text(job)} generations{pct}")
     t.add_row("best", best_text(objective_names_for(spec), job.get("best_objective")) or "—")
@@ -88,7 +116,7 @@ def jobs_table(page: dict[str, Any]) -> Table:
     for j in page["items"]:
         kind = j.get("kind") or ""
         best = best_text(objective_names_for(kind) if kind else None, j.get("best_objective"))
-        t.add_row(short(j["id"]), j.get("name") or kind, j["status"], progress_text(j),
+        t.add_row(short(j["id"]), j.get("name") or kind, status_text(j), progress_text(j),
                   best or "—", _time(j.get("created_at")))  # fmt: skip
     return t
 
@@ -117,7 +145,7 @@ def sweep_table(sw: dict[str, Any]) -> Table:
             best = best_text(names, r.get("best_objective"))
         prog = r.get("progress")
         cells = [fmt(over.get(c)) for c in columns]
-        t.add_row(short(str(r.get("job_id", ""))), *cells, str(r.get("status", "")),
+        t.add_row(short(str(r.get("job_id", ""))), *cells, status_text(r),
                   "" if prog is None else f"{100 * prog:.0f} %", best or "—")  # fmt: skip
     return t
 

@@ -8,6 +8,12 @@ in-process ``RunResult.to_dict()`` (:meth:`ResultView.from_run`). Names and unit
 
 Conventions: numbers have 4 significant digits; a quantity the user maximises is shown
 positive (``neg_score`` → ``score``); a metric that repeats another (``same_as``) is not shown.
+
+Feasibility is part of the answer: an optimum that violates a constraint is announced as
+``INFEASIBLE: <each violation, its amount and unit>`` before any number; a change in % is
+computed only between feasible solutions (a start or optimum that violates a constraint gets
+"—" and the reason); the paper's numbers appear only for the paper's robot and settings
+(``services.paper_numbers``).
 """
 
 from __future__ import annotations
@@ -31,7 +37,15 @@ from legcore.studies.metric_names import (
     joint_row_name,
     metric_name,
 )
+from services.display_verdict import (
+    change_withheld,
+    task_line,
+    task_lines,
+    verdict_cell,
+    verdict_line,
+)
 from services.paper_numbers import dotted, paper_entry
+from services.verdict import Verdict
 
 __all__ = [
     "ResultView",
@@ -69,7 +83,10 @@ def label(m: MetricName) -> str:
 # ------------------------------------------------------------------ one result
 @dataclass
 class ResultView:
-    """A finished job as the CLI shows it (all values in the studies' units)."""
+    """A finished job as the CLI shows it (all values in the studies' units): the optimum's
+    objectives and metrics, its verdict (``verdict``), the task it ran (``task``: parameters,
+    the rules that derived them from the robot, the paper's preset), every baseline's metrics
+    and verdict."""
 
     kind: str
     objective_names: list[str]
@@ -80,6 +97,9 @@ class ResultView:
     optimizer: dict[str, Any] = field(default_factory=dict)
     front_size: int | None = None
     start: dict[str, Any] | None = None
+    verdict: Verdict = field(default_factory=Verdict)
+    baseline_verdicts: dict[str, Verdict] = field(default_factory=dict)
+    task: dict[str, Any] | None = None
 
     @classmethod
     def from_api(cls, kind: str, res: dict[str, Any], front_size: int | None = None) -> ResultView:
@@ -92,31 +112,44 @@ class ResultView:
                               strict=False))  # fmt: skip
         summary = res.get("summary") or {}
         baselines = res.get("baselines") or []
+        verdicts: dict[str, Verdict] = {}
         if isinstance(baselines, list):
+            verdicts = {b["name"]: Verdict.of(b.get("metrics"), b.get("feasible"),
+                                              b.get("violations")) for b in baselines}  # fmt: skip
             baselines = {b["name"]: b.get("metrics") or {} for b in baselines}
+        else:
+            verdicts = {k: Verdict.of(v) for k, v in baselines.items()}
         # a stored baseline is the decoded solution: {x, objectives, metrics, table, extra}
         baselines = {
             k: v["metrics"] if isinstance(v.get("metrics"), dict) else v
             for k, v in baselines.items()
         }
+        task = res.get("task") or summary.get("task")
         return cls(kind, names, dict(values), dict(res.get("metrics") or {}), dict(baselines),
                    list(summary.get("table") or []), dict(summary.get("optimizer") or {}),
-                   front_size, summary.get("start"))  # fmt: skip
+                   front_size, summary.get("start"),
+                   Verdict.of(None, res.get("feasible"), res.get("violations")), verdicts,
+                   task if isinstance(task, dict) else None)  # fmt: skip
 
     @classmethod
     def from_run(cls, doc: dict[str, Any]) -> ResultView:
         """From ``RunResult.to_dict()`` (``legopt run``)."""
         best = doc["best"]
+        baselines = doc.get("baselines", {})
+        task = doc.get("task")
         return cls(
             doc["spec"]["problem"]["kind"],
             list(doc["objective_names"]),
             dict(best["objectives"]),
             dict(best["metrics"]),
-            {k: v["metrics"] for k, v in doc.get("baselines", {}).items()},
+            {k: v["metrics"] for k, v in baselines.items()},
             list(best.get("table") or []),
             dict(doc.get("optimizer") or {}),
             len(doc.get("pareto") or []),
             doc.get("start"),
+            Verdict.of(None, doc.get("feasible"), doc.get("violations")),
+            {k: Verdict.of(v) for k, v in baselines.items()},
+            task if isinstance(task, dict) else None,
         )
 
     # -------------------------------------------------------------- rows
@@ -224,14 +257,21 @@ def _pair(a: Any, b: Any, m: MetricName, single: bool = False) -> str:
 def summary_block(
     view: ResultView, *, title: str, spec: dict[str, Any] | None = None
 ) -> RenderableType:
-    """One study in a few lines: what was optimised, start → optimum of the objectives and
-    headline metrics, ours beside the paper's numbers (its symbol in parentheses)."""
+    """One study in a few lines: the verdict (``INFEASIBLE: …`` first when the optimum
+    violates a constraint), the task's derived values, what was optimised, start → optimum of
+    the objectives and headline metrics with the change in % (only between feasible
+    solutions, else "—" and the reason), ours beside the paper's numbers (its symbol in
+    parentheses; only on the paper's robot and settings)."""
     study = STUDY_DISPLAY.get(view.kind)
-    paper = paper_entry(spec)
+    paper = paper_entry(spec, view.task)
     start = (paper.start if paper and paper.start else None) or (study.start if study else None)
     if start not in view.baselines:
         start = None
     lines: list[RenderableType] = [Text.from_markup(title)]
+    for extra_line in (verdict_line(view.verdict), task_line(view.task)):
+        if extra_line is not None:
+            lines.append(extra_line)
+    no_change = change_withheld(view.verdict, start, view.baseline_verdicts)
     what = study.task if study else "the decision variables"
     head = f"  optimised: {what}"
     if start:
@@ -279,8 +319,13 @@ def summary_block(
                 paper_txt += f"  ({change})"
         if m.note:
             notes.append(f"{m.label}: {m.note}")
-        t.add_row("  " + name, ours, _change(s, v, m), paper_txt)
+        change = _change(s, v, m)
+        if no_change and change:
+            change = "—"
+        t.add_row("  " + name, ours, change, paper_txt)
     lines.append(t)
+    if no_change:
+        lines.append(Text(f"  change: — because {no_change}", style="yellow"))
     earned = earned_line(view)
     if earned:
         lines.append(Text(earned))
@@ -328,7 +373,7 @@ def full_tables(
     cols = list(view.baselines)
     for b in cols:
         t.add_column(baseline_name(b), justify="right", overflow="fold")
-    paper = paper_entry(spec)
+    paper = paper_entry(spec, view.task)
     prows = {r.metric: r for r in paper.rows if r.start is not None or r.optimum is not None} \
         if paper else {}  # fmt: skip
     if prows:
@@ -343,18 +388,22 @@ def full_tables(
                                                 else "", fmt(pr.optimum, m)]  # fmt: skip
         return out
 
+    blank = [""] * (len(cols) + (2 if prows else 0))
+    checked = [view.verdict, *(view.baseline_verdicts.get(b, Verdict()) for b in cols)]
+    if any(v.feasible is not None for v in checked):
+        t.add_row("meets every constraint", *[verdict_cell(v) for v in checked],
+                  *blank[len(cols):])  # fmt: skip
     for key, m, v in view.shown_objectives():
         goal = "maximised" if m.sense == "max" else "minimised"
         t.add_row(f"{label(m)} — {goal}", fmt(v, m), *cells(key, m))
     for key, m in view.shown_metrics():
         t.add_row(label(m), fmt(view.value(key), m), *cells(key, m))
     opt = view.optimizer
-    blank = [""] * (len(cols) + (2 if prows else 0))
     if opt:
         t.add_row("generations / evaluations", f"{opt.get('n_gen')} / {opt.get('n_evals')}",
                   *blank)  # fmt: skip
         t.add_row("optimiser time (s)", fmt(opt.get("elapsed_s")), *blank)
-    out: list[RenderableType] = [Text.from_markup(title), t]
+    out: list[RenderableType] = [Text.from_markup(title), *task_lines(view.task), t]
     if paper and prows:
         out.append(Text(f"paper: {paper.source}", style="dim"))
     if view.table:

@@ -7,6 +7,12 @@ from typing import Any
 
 from pydantic import BaseModel, Field
 
+from services.api.verdict_schemas import (
+    FEASIBLE_DESCRIPTION,
+    VIOLATIONS_DESCRIPTION,
+    ViolationOut,
+    violations_out,
+)
 from services.store.dashboard_queries import JobRow
 from services.store.tables import JobStatus
 
@@ -44,6 +50,10 @@ class JobRowOut(BaseModel):
     total_generations: int
     progress: float
     best_objective: Any = None
+    feasible: bool | None = Field(default=None, description=FEASIBLE_DESCRIPTION)
+    violations: list[ViolationOut] = Field(
+        default_factory=list, description=VIOLATIONS_DESCRIPTION
+    )
     attempts: int
     cancel_requested: bool
     error: str | None
@@ -68,6 +78,8 @@ class JobRowOut(BaseModel):
             total_generations=job.total_generations,
             progress=job.progress,
             best_objective=job.best_objective,
+            feasible=job.feasible,
+            violations=violations_out(job.violations),
             attempts=job.attempt_count,
             cancel_requested=job.cancel_requested,
             error=job.error_message,

@@ -17,6 +17,14 @@ from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, WithJsonSchema, 
 from legcore.jobspec import JobSpec
 from legcore.robots import RobotSpec
 from services.api.validation import RobotSummary
+from services.api.verdict_schemas import (
+    FEASIBLE_DESCRIPTION,
+    VIOLATIONS_DESCRIPTION,
+    TaskOut,
+    ViolationOut,
+    feasible_of,
+    violations_out,
+)
 from services.store.records import (
     ArtifactRecord,
     BaselineRecord,
@@ -236,7 +244,8 @@ class CatalogEntry(BaseModel):
 
 
 class JobOut(BaseModel):
-    """A job: status, progress, best objective so far, attempts, error, warnings, times."""
+    """A job: status, progress, best objective so far, the verdict (``feasible``, ``violations``)
+    once it succeeded, attempts, error, warnings, times."""
 
     id: str
     name: str | None = None
@@ -247,6 +256,10 @@ class JobOut(BaseModel):
     total_generations: int
     progress: float = Field(ge=0, le=1, description="generation / total_generations.")
     best_objective: Any = Field(default=None, description="Best objective(s) so far.")
+    feasible: bool | None = Field(default=None, description=FEASIBLE_DESCRIPTION)
+    violations: list[ViolationOut] = Field(
+        default_factory=list, description=VIOLATIONS_DESCRIPTION
+    )
     attempts: int = Field(description="Times a worker claimed the job.")
     cancel_requested: bool
     error: str | None = Field(default=None, description="Why the job failed.")
@@ -272,6 +285,8 @@ class JobOut(BaseModel):
             total_generations=job.total_generations,
             progress=job.progress,
             best_objective=job.best_objective,
+            feasible=job.feasible,
+            violations=violations_out(job.violations),
             attempts=job.attempt_count,
             cancel_requested=job.cancel_requested,
             error=job.error_message,
@@ -298,11 +313,24 @@ class BaselineOut(BaseModel):
     """A baseline solution of the study (the seed paper's references) and its metrics."""
 
     name: str
-    metrics: Any
+    metrics: Any = Field(
+        description="The decoded solution as stored: {x, objectives, metrics, table, extra, "
+        "feasible, violations}."
+    )
+    feasible: bool | None = Field(
+        default=None,
+        description="Whether this baseline meets every constraint on the job's robot (null: "
+        "not checked). A change in % is computed against it only when it is feasible.",
+    )
+    violations: list[ViolationOut] = Field(
+        default_factory=list, description="What this baseline violates."
+    )
 
     @classmethod
     def from_record(cls, b: BaselineRecord) -> BaselineOut:
-        return cls(name=b.name, metrics=b.metrics)
+        doc = b.metrics if isinstance(b.metrics, dict) else {}
+        return cls(name=b.name, metrics=b.metrics, feasible=feasible_of(doc),
+                   violations=violations_out(doc.get("violations")))  # fmt: skip
 
 
 class ArtifactOut(BaseModel):
@@ -329,9 +357,18 @@ def objective_names(result: ResultRecord | dict[str, Any] | None) -> list[str]:
 
 
 class ResultOut(BaseModel):
-    """The final result of a succeeded job."""
+    """The final result of a succeeded job, with its verdict and the task it ran."""
 
     job_id: str
+    feasible: bool | None = Field(default=None, description=FEASIBLE_DESCRIPTION)
+    violations: list[ViolationOut] = Field(
+        default_factory=list, description=VIOLATIONS_DESCRIPTION
+    )
+    task: TaskOut | None = Field(
+        default=None,
+        description="The study parameters the job ran with on its robot and the rule behind "
+        "each derived value (null for jobs stored before tasks were recorded).",
+    )
     objective_names: list[str]
     objectives: Any = Field(
         description="Objectives of the best solution as stored by the worker: "
@@ -350,9 +387,15 @@ class ResultOut(BaseModel):
         result: ResultRecord,
         baselines: tuple[BaselineRecord, ...],
         artifacts: tuple[ArtifactRecord, ...],
+        job: JobRecord | None = None,
     ) -> ResultOut:
+        """``job``: the job the result is of (its verdict; without it: not checked)."""
+        summary = result.summary if isinstance(result.summary, dict) else {}
         return cls(
             job_id=result.job_id,
+            feasible=None if job is None else job.feasible,
+            violations=[] if job is None else violations_out(job.violations),
+            task=TaskOut.from_doc(summary.get("task")),
             objective_names=objective_names(result),
             objectives=result.objectives,
             best_x=result.best_x,
@@ -519,6 +562,7 @@ class SweepRow(BaseModel):
     best_objective: Any = None
     objectives: Any = Field(default=None, description="Final objectives (succeeded jobs).")
     metrics: Any = Field(default=None, description="Final key metrics (succeeded jobs).")
+    feasible: bool | None = Field(default=None, description=FEASIBLE_DESCRIPTION)
     error: str | None = None
 
 
@@ -578,8 +622,12 @@ __all__ = [
     "SweepOut",
     "SweepRow",
     "SweepSummary",
+    "TaskOut",
+    "ViolationOut",
+    "feasible_of",
     "inline_json_schema",
     "job_spec_schema",
     "objective_names",
     "robot_spec_schema",
+    "violations_out",
 ]

@@ -148,9 +148,10 @@ def missing_labels(session: Session, owner_key_id: str) -> bool:
 
 @dataclass(frozen=True)
 class JobFilter:
-    """What a jobs page shows: statuses, study kind, optimizer, robot (exact), sweep, tag and a
+    """What a jobs page shows: statuses, study kind, optimizer, robot (exact), sweep, tag, a
     free-text ``search`` (matched, case-insensitively, against name, kind, robot, optimizer,
-    tags, seed, job and sweep ids)."""
+    tags, seed, job and sweep ids) and the verdict (``feasible`` True / False: succeeded jobs
+    whose optimum was found feasible / infeasible; None: any)."""
 
     status: tuple[JobStatus, ...] = ()
     kind: str | None = None
@@ -159,6 +160,7 @@ class JobFilter:
     sweep_id: str | None = None
     tag: str | None = None
     search: str | None = None
+    feasible: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -211,6 +213,8 @@ def _conditions(owner_key_id: str, f: JobFilter, by_labels: bool) -> list[Column
         c.append(JOB_LABELS.c.robot == f.robot)
     if f.sweep_id:
         c.append(JOBS.c.sweep_id == f.sweep_id)
+    if f.feasible is not None:
+        c.append(JOBS.c.feasible == bool(f.feasible))
     if f.tag:
         tags = literal(",") + JOB_LABELS.c.tags + literal(",")
         c.append(tags.like(_like(f",{f.tag},"), escape="\\"))
@@ -390,7 +394,8 @@ def list_job_rows(
     stmt = select(JOBS, *labels).select_from(joined).where(*conditions)
     total = -1
     if count:
-        mixed = by_labels and bool(f.status or f.sweep_id)  # conditions on both tables
+        # conditions on both tables
+        mixed = by_labels and bool(f.status or f.sweep_id or f.feasible is not None)
         source = joined if mixed else JOB_LABELS if by_labels else JOBS
         matches = select(literal(1)).select_from(source).where(*conditions)
         capped = matches.limit(COUNT_CAP + 1).subquery()

@@ -473,12 +473,17 @@ def finish_job(
 ) -> JobRecord:
     """running -> succeeded, writing result, Pareto front, baselines and artifact rows at once.
 
-    All-or-nothing (inside a SAVEPOINT): if any row fails (e.g. two Pareto points with the same
-    index) the exception propagates and neither the rows nor the status change are kept.
-    ``warnings`` are appended to the job's warnings. Raises LeaseLostError, writing nothing,
-    if ``worker_id`` does not own the lease.
+    The job's verdict (``result.feasible`` and ``result.violations``) is written on the job
+    row by the same UPDATE that makes it succeeded: a succeeded job never lacks the verdict
+    its worker found (None only when the result was not checked). All-or-nothing (inside a
+    SAVEPOINT): if any row fails (e.g. two Pareto points with the same index) the exception
+    propagates and neither the rows nor the status change are kept. ``warnings`` are appended
+    to the job's warnings. Raises LeaseLostError, writing nothing, if ``worker_id`` does not
+    own the lease.
     """
     now = now_utc(now)
+    feasible = None if result.feasible is None else bool(result.feasible)
+    violations = None if feasible is None else list(result.violations or [])
     with session.begin_nested():
         _require_owner(
             session,
@@ -487,6 +492,8 @@ def finish_job(
             _terminal_values(
                 JobStatus.SUCCEEDED,
                 now,
+                feasible=feasible,
+                violations=violations,
                 progress_generation=case(
                     (
                         JOBS.c.progress_generation < JOBS.c.total_generations,

@@ -109,6 +109,10 @@ class JobRecord:
     dispatch_due_at: datetime | None = None
     last_dispatch_at: datetime | None = None
     dispatch_count: int = 0
+    #: The verdict of a succeeded job: its optimum meets every constraint (True), violates
+    #: ``violations`` (False), or None (not succeeded, or finished before it was checked).
+    feasible: bool | None = None
+    violations: Any = None
 
     @property
     def is_terminal(self) -> bool:
@@ -243,12 +247,16 @@ class GenerationIn:
 
 @dataclass(frozen=True, slots=True)
 class ResultIn:
-    """The final result to store with ``finish_job``."""
+    """The final result to store with ``finish_job``. ``feasible`` and ``violations`` (the
+    optimum's violated constraints, ``[{"constraint", "amount", "unit", "text"}, ...]``) are
+    the job's verdict, written on the job row; None: not checked."""
 
     best_x: Any = None
     objectives: Any = None
     metrics: Any = None
     summary: Any = None
+    feasible: bool | None = None
+    violations: Any = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -503,9 +503,11 @@ def list_jobs(
     limit: int = 50,
     offset: int = 0,
     id_prefix: str | None = None,
+    feasible: bool | None = None,
 ) -> Page[JobRecord]:
-    """Jobs filtered by owner, status (one or several), sweep and id prefix (a range of the
-    primary key's index: ``services.store.id_prefix``), newest first."""
+    """Jobs filtered by owner, status (one or several), sweep, id prefix (a range of the
+    primary key's index: ``services.store.id_prefix``) and verdict (``feasible`` True or
+    False: only succeeded jobs whose optimum was found feasible / infeasible), newest first."""
     conditions = _owned(JOBS, owner_key_id)
     if id_prefix:
         conditions = owned_with_prefix(JOBS, owner_key_id, id_prefix)
@@ -513,6 +515,8 @@ def list_jobs(
         conditions.append(JOBS.c.status.in_(_statuses(status)))
     if sweep_id is not None:
         conditions.append(JOBS.c.sweep_id == sweep_id)
+    if feasible is not None:
+        conditions.append(JOBS.c.feasible == bool(feasible))
     stmt = select(JOBS).where(*conditions)
     return fetch_page(
         session, JobRecord, stmt, (JOBS.c.created_at.desc(), JOBS.c.id), limit, offset

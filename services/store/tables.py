@@ -194,6 +194,7 @@ class Job(Base):
         Index(None, "owner_key_id", "finished_at", "created_at", "id"),
         Index(None, "owner_key_id", "progress_generation", "created_at", "id"),
         Index(None, "owner_key_id", "best_value", "created_at", "id"),
+        Index(None, "owner_key_id", "feasible", "created_at", "id"),
     )
 
     id: Mapped[str] = mapped_column(String(ID_LENGTH), primary_key=True, default=new_id)
@@ -230,6 +231,13 @@ class Job(Base):
 
     error_message: Mapped[str | None] = mapped_column(Text)
     warnings: Mapped[Any] = mapped_column(JSONValue(), default=list)
+    # The verdict of a succeeded job (written by ``finish_job`` with its result): whether its
+    # reported optimum meets every constraint of the study, and if not what it violates
+    # (``[{"constraint", "amount", "unit", "text"}, ...]``, ``legcore.studies.task.Violation``).
+    # NULL until the job succeeds, and for jobs finished before revision 0008 (not checked).
+    # The status stays ``succeeded`` (the run completed): an infeasible answer is a verdict.
+    feasible: Mapped[bool | None] = mapped_column(Boolean, default=None)
+    violations: Mapped[Any | None] = mapped_column(JSONValue(), default=None)
     # The point the per-generation hypervolumes are measured against (objective space, the
     # worker sets it once from the first front: ``services.worker.hypervolume``).
     hypervolume_ref: Mapped[Any | None] = mapped_column(JSONValue(), default=None)

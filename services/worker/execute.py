@@ -382,7 +382,13 @@ def _store_attempt(
                     "optimizer": doc["optimizer"],
                     "start": doc.get("start"),
                     "history": doc["history"],
+                    # the robot-relative parameters the job ran with and the rule behind each
+                    # derived value (what the job page and `legopt results` show)
+                    "task": doc.get("task"),
                 },
+                # the verdict, on the job row (GET /jobs, the jobs page, exports)
+                feasible=doc.get("feasible"),
+                violations=doc.get("violations"),
             ),
             pareto=[ParetoPointIn(i, p["x"], p["objectives"]) for i, p in enumerate(doc["pareto"])],
             baselines=[BaselineIn(name, b) for name, b in doc["baselines"].items()],

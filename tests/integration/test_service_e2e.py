@@ -67,6 +67,11 @@ def test_each_example_study_end_to_end(stack: Stack) -> None:
             result = c.result(job_id)
             assert result["objective_names"], name
             assert result["metrics"], name
+            # never "succeeded" without a verdict: the job row says what its result says
+            assert isinstance(job["feasible"], bool), (name, job)
+            assert result["feasible"] is job["feasible"], name
+            assert bool(job["violations"]) is not job["feasible"], (name, job["violations"])
+            assert result["violations"] == job["violations"] and result["task"], name
             front = c.pareto(job_id)
             assert front["total"] >= 1 and len(front["items"]) == front["total"], name
             assert len(front["items"][0]["objectives"]) == len(result["objective_names"]), name
@@ -277,6 +282,7 @@ def test_cli_talks_to_the_service(stack: Stack, tmp_path: Path) -> None:
     assert out.returncode == 0
     doc = json.loads(out.stdout)
     assert doc["job_id"] == job_id and len(doc["objective_names"]) == 1
+    assert isinstance(doc["feasible"], bool) and doc["task"]["params"]["kind"] == "quadruped_gait"
     bad = tmp_path / "bad.yaml"
     bad.write_text(yaml.safe_dump({"problem": {"kind": "quadruped_gait"}, "budget": {"gens": 3}}))
     out = legopt("submit", str(bad))

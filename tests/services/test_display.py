@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 import yaml
 from rich.console import Console
 
@@ -109,3 +110,142 @@ def test_paper_numbers_match_each_example_once() -> None:
     assert flat is not None and "Table 3" in flat.source
     assert box is not None and "Table 5" in box.source
     assert paper_entry({"problem": {"kind": "no_such_study"}}) is None
+
+
+# ------------------------------------------------------------------ feasibility (issue 25)
+#: A quadruped_gait result asked for a 20 mm static margin the robot cannot give: the optimum
+#: and the default step both violate it (values of a real run, rounded).
+GAIT_VIOLATIONS = [
+    {"constraint": "stability_margin_mm", "amount": 17.64, "unit": "mm",
+     "text": "static stability margin 2.36 mm, 17.6 mm short of the required 20 mm"},
+    {"constraint": "joint_speed", "amount": 0.0546, "unit": "", "text": ""},
+]  # fmt: skip
+
+
+def _gait(feasible: bool, start_feasible: bool, *, task: bool = True) -> ResultView:
+    metrics = {"energy_per_metre": 2.5, "step_length_m": 0.1, "step_height_m": 0.03,
+               "duty": 0.8, "min_stability_margin_m": 0.00236}  # fmt: skip
+    start = {"energy_per_metre": 3.1, "step_length_m": 0.08, "step_height_m": 0.03,
+             "duty": 0.8, "min_stability_margin_m": 0.0006}  # fmt: skip
+    return ResultView.from_api("quadruped_gait", {
+        "objective_names": ["energy_per_metre"],
+        "objectives": {"names": ["energy_per_metre"], "values": {"energy_per_metre": 2.5}},
+        "metrics": metrics,
+        "feasible": feasible,
+        "violations": [] if feasible else GAIT_VIOLATIONS,
+        "task": {"params": {"depth": 0.18}, "preset": None,
+                 "rules": {"depth": "0.75 × leg length (0.24 m) = 0.18 m below the hip",
+                           "speed": "Froude 0.05 at leg length 0.24 m = 0.077 m/s"}}
+        if task else None,
+        "summary": {"optimizer": {"kind": "hka", "n_gen": 2}},
+        "baselines": [{"name": "default_step", "feasible": start_feasible,
+                       "violations": [] if start_feasible else GAIT_VIOLATIONS[:1],
+                       "metrics": {"x": [0.08, 0.03, 0.8], "metrics": start}}],
+    })  # fmt: skip
+
+
+def test_an_infeasible_optimum_is_announced_with_each_violation() -> None:
+    from services.display_verdict import verdict_line
+
+    view = _gait(feasible=False, start_feasible=True)
+    text = _text(summary_block(view, title="walk", spec={"problem": {"kind": "quadruped_gait"}}))
+    lines = text.splitlines()
+    assert lines[1].strip() == (
+        "INFEASIBLE: stability_margin_mm over its limit by 17.64 mm — static stability margin "
+        "2.36 mm, 17.6 mm short of the required 20 mm; joint_speed over its limit by 0.0546"
+    )  # right under the title, before any number
+    line = verdict_line(view.verdict)
+    assert line is not None and str(line.style) == "bold red"
+    # no change in % towards an answer that breaks the constraints
+    assert "%" not in text and "change: — because the optimum is infeasible" in text
+    full = _text(*full_tables(view, title="walk"))  # (printed before the summary block)
+    row = next(ln for ln in full.splitlines() if "meets every constraint" in ln)
+    assert row.split()[-2:] == ["NO", "yes"]  # the optimum, the default step
+
+    ok = _gait(feasible=True, start_feasible=True)
+    text = _text(summary_block(ok, title="walk", spec={"problem": {"kind": "quadruped_gait"}}))
+    assert "INFEASIBLE" not in text and "feasible: the optimum meets every constraint" in text
+    assert "-19.4 %" in text  # 3.1 → 2.5 J/m, both feasible: the change is shown
+    assert str(verdict_line(ok.verdict).style) == "green"  # type: ignore[union-attr]
+    unchecked = _swing_view()  # a result stored before the verdict existed: no claim either way
+    assert verdict_line(unchecked.verdict) is None
+    assert "feasible: the" not in _text(summary_block(unchecked, title="t"))
+    assert "meets every constraint" not in _text(*full_tables(unchecked, title="t"))
+
+
+def test_no_change_in_percent_against_an_infeasible_start() -> None:
+    view = _gait(feasible=True, start_feasible=False)
+    text = _text(summary_block(view, title="walk", spec={"problem": {"kind": "quadruped_gait"}}))
+    row = next(ln for ln in text.splitlines() if "energy per metre" in ln.lower())
+    assert "3.1 → 2.5" in row and row.rstrip().endswith("—") and "%" not in row
+    assert ("change: — because the start (" in text and ") is infeasible: stability_margin_mm "
+            "over its limit by 17.64 mm" in text)  # fmt: skip
+
+
+def test_the_task_rules_are_one_line() -> None:
+    text = _text(summary_block(_gait(True, True), title="walk"))
+    (line,) = [ln for ln in text.splitlines() if ln.strip().startswith("task ")]
+    assert line.strip() == (
+        "task derived from the robot: depth: 0.75 × leg length (0.24 m) = 0.18 m below the hip; "
+        "speed: Froude 0.05 at leg length 0.24 m = 0.077 m/s"
+    )
+    assert not [ln for ln in _text(summary_block(_gait(True, True, task=False), title="w"))
+                .splitlines() if ln.strip().startswith("task ")]  # fmt: skip
+    # a long rule stays one line in the summary (cut at the console's width)...
+    view = _gait(True, True)
+    view.task = {"params": {}, "preset": "seed 003, Table 2",
+                 "rules": {"q_ref": "standing postures " + "with the feet 0.16 m below " * 20}}
+    lines = [ln for ln in _text(summary_block(view, title="w")).splitlines() if "task" in ln]
+    assert len(lines) == 1 and lines[0].rstrip().endswith("…")
+    # ...and whole, with the paper's preset, in the full tables
+    full = _text(*full_tables(view, title="w"))
+    assert "task: what the spec leaves out is the paper's — seed 003, Table 2" in full
+    assert "    q_ref: standing postures with the feet" in full
+
+
+def test_paper_numbers_only_on_the_papers_robot() -> None:
+    """The PUMA paper's 18.56 → 8.59 J is not printed beside a Z1 arm, nor Calderón's numbers
+    beside another leg: the robot must be the paper's (by name, or the study's default)."""
+    pan = yaml.safe_load((ROOT / "examples" / "001_path_placement_pan.yaml").read_text())
+    assert paper_entry(pan) is not None and paper_entry({**pan, "robot": None}) is not None
+    for robot in ("articulated_5dof", {"kind": "urdf", "name": "z1", "urdf": "<robot/>"},
+                  "z1-stored-under-this-name"):  # fmt: skip
+        assert paper_entry({**pan, "robot": robot}) is None, robot
+    flat = yaml.safe_load((ROOT / "examples" / "000_swing_energy_flat.yaml").read_text())
+    other = {**flat, "robot": {"kind": "urdf", "name": "solo12_leg", "urdf": "<robot/>"}}
+    ours = _text(summary_block(_swing_view(), title="000 flat", spec=flat))
+    theirs = _text(summary_block(_swing_view(), title="flat on a Solo12 leg", spec=other))
+    assert "0.078 → 0.0003" in ours and "Calderón et al. 2015" in ours
+    assert "0.078" not in theirs and "Calderón et al. 2015" not in theirs
+    assert "(paper: F)" in theirs  # the symbol of our quantity stays: it names the formula
+    # the paper's robot, but not the paper's settings: a 20 mm margin instead of its 1 mm
+    walk = yaml.safe_load((ROOT / "examples" / "003_quadruped_gait.yaml").read_text())
+    assert paper_entry(walk) is not None
+    assert paper_entry({**walk, "problem": {**walk["problem"], "stability_margin": 0.001}})
+    assert paper_entry({**walk, "problem": {**walk["problem"], "stability_margin": 0.02}}) is None
+    # when the task a job ran is known (stored with its result), its values decide
+    ran = {"kind": "quadruped_gait", "depth": 0.1648, "stability_margin": 0.001}
+    assert paper_entry(walk, {"params": ran}) is not None
+    assert paper_entry(walk, {"params": {**ran, "depth": 0.2}}) is None
+
+
+def test_status_marks_an_infeasible_job_in_red(monkeypatch: pytest.MonkeyPatch) -> None:
+    from services import cli_views
+    from services.cli_views import job_block, jobs_table, status_text
+
+    # (the objective names, without building the study's default problem)
+    monkeypatch.setattr(cli_views, "objective_names_for", lambda _spec: ["energy_per_metre"])
+
+    job = {"id": "2253abcd-0000", "kind": "quadruped_gait", "status": "succeeded",
+           "feasible": False, "violations": GAIT_VIOLATIONS, "generation": 2,
+           "total_generations": 2, "progress": 1.0, "attempts": 1, "spec": {}}  # fmt: skip
+    assert str(status_text(job)) == "succeeded (infeasible)"
+    assert str(status_text(job).style) == "bold red"
+    assert str(status_text({**job, "feasible": True}).style) == "green"
+    assert str(status_text({**job, "feasible": None})) == "succeeded"  # not checked: no claim
+    assert str(status_text({**job, "status": "failed", "feasible": None})) == "failed"
+    table = _text(jobs_table({"items": [job], "total": 1}))
+    assert "succeeded (infeasible)" in table
+    block = _text(job_block(job))
+    assert "succeeded (infeasible), attempt 1" in block
+    assert "INFEASIBLE: stability_margin_mm over its limit by 17.64 mm" in block

@@ -1,7 +1,8 @@
 """The dashboard in a real Chromium against the real embedded service: log in with the key,
 submit a job from the page and others over the API, watch them finish, open a front, click a
 point and see its joint plot and the Rerun viewer load that point's recording, cancel a running
-job and re-run a finished one from the jobs table, draw a three-objective front in 3-D, open a
+job and re-run a finished one from the jobs table, draw a three-objective front in 3-D, see an
+infeasible job's verdict in red (jobs table and job page) and a feasible one's in green, open a
 sweep and its cell table, download CSVs and read them back. Every request any page makes
 (dashboard, viewer, Swagger UI) is recorded and must stay on this server. Each page is
 screenshotted (``shots``).
@@ -53,6 +54,31 @@ LONG: dict[str, Any] = {
     "record": False,
     "budget": {"generations": 5000},  # the API's limit
 }
+#: Seed 003's walk with every parameter given (independent of the study's robot-relative
+#: defaults), two generations of a small HKA: a few seconds of the worker. FEASIBLE_GAIT meets
+#: its 1 mm static margin; INFEASIBLE_GAIT asks for 20 mm, which no step of its search box
+#: has (the best keeps ~2.4 mm): it succeeds with an infeasible optimum.
+FEASIBLE_GAIT: dict[str, Any] = {
+    "name": "browser gait, 1 mm margin",
+    "robot": "animatronic_quadruped",
+    "problem": {
+        "kind": "quadruped_gait", "stability_margin": 0.001, "step_length": 0.08,
+        "step_height": 0.03, "duty": 0.8, "speed": 0.03, "depth": 0.1648,
+        "stroke_center": -0.0012, "step_length_bounds": [0.04, 0.13],
+        "step_height_bounds": [0.01, 0.05], "duty_bounds": [0.75, 0.9],
+    },
+    "optimizer": {"kind": "hka", "params": {"n_samples": 20, "survey_size": 40}},
+    "budget": {"generations": 2},
+    "seed": 1,
+    "record": False,
+}  # fmt: skip
+INFEASIBLE_GAIT: dict[str, Any] = {
+    **FEASIBLE_GAIT,
+    "name": "browser gait, 20 mm margin",
+    "problem": {**FEASIBLE_GAIT["problem"], "stability_margin": 0.02},
+}
+#: The stylesheet's red and green (--bad, --ok), as the browser computes them.
+RED, GREEN = "rgb(192, 57, 43)", "rgb(31, 138, 76)"
 TIMEOUT_MS = 60_000
 #: The servers the Rerun web viewer calls by itself (viewer.html swallows those calls).
 VIEWER_CALLS_HOME = {"tel.rerun.io", "api.github.com"}
@@ -288,6 +314,60 @@ def test_three_objective_front(page: Any, stack: Stack, shots: Path, ids: dict[s
     heads = page.locator("#front-table thead th").all_text_contents()
     assert [t for t in heads if t in drawn["titles"]] == drawn["titles"], heads
     page.screenshot(path=shots / "job-3d.png", full_page=True)
+    assert not page.legopt_errors, page.legopt_errors
+
+
+def _color(page: Any, selector: str, prop: str = "color") -> str:
+    return str(page.eval_on_selector(selector, f"el => getComputedStyle(el).{prop}"))
+
+
+def test_the_verdict_is_red_or_green(page: Any, stack: Stack, shots: Path) -> None:
+    """An infeasible job is a red "infeasible" badge in the jobs table (never the green
+    "succeeded"), and its page shows the verdict first, in red, with each violated constraint
+    and by how much; a feasible job's page says so in green."""
+    with stack.client() as c:
+        bad_id = c.submit(INFEASIBLE_GAIT)["id"]
+        good_id = c.submit(FEASIBLE_GAIT)["id"]
+    bad = stack.wait_for(bad_id, lambda j: j["status"] == "succeeded")
+    good = stack.wait_for(good_id, lambda j: j["status"] == "succeeded")
+    assert bad["feasible"] is False and good["feasible"] is True, (bad, good)
+
+    page.goto(f"{stack.url}/#/jobs")
+    row = f"tr[data-job='{bad_id}'][data-status='succeeded'][data-verdict='infeasible']"
+    page.wait_for_selector(f"{row} .badge.infeasible")
+    assert page.inner_text(f"{row} .badge") == "infeasible"
+    assert _color(page, f"{row} .badge", "backgroundColor") == RED
+    ok_row = f"tr[data-job='{good_id}'][data-verdict='feasible']"
+    assert _color(page, f"{ok_row} .badge.succeeded") == GREEN
+    page.select_option("#verdict-filter", "false")  # the verdict filter: only infeasible jobs
+    page.wait_for_selector(f"tr[data-job='{good_id}']", state="detached")
+    assert page.locator(f"tr[data-job='{bad_id}']").count() == 1
+    page.screenshot(path=shots / "jobs-infeasible.png", full_page=True)
+
+    page.goto(f"{stack.url}/#/job/{bad_id}")
+    page.wait_for_selector("#verdict.infeasible h2")
+    assert page.inner_text("#verdict h2").startswith("Infeasible")
+    assert _color(page, "#verdict h2") == RED
+    assert _color(page, "#verdict", "borderLeftColor") == RED
+    margin = page.inner_text("#violations li[data-constraint='stability_margin_mm']")
+    amount = next(v for v in bad["violations"] if v["constraint"] == "stability_margin_mm")
+    assert "over its limit by" in margin and f"{amount['amount']:.4g}" in margin, margin
+    page.wait_for_selector("#metrics-table")  # the result is drawn below the verdict
+    with stack.client() as c:
+        task = c.result(bad_id)["task"]
+    assert task["params"]["stability_margin"] == 0.02
+    if task["rules"] or task["preset"]:  # the rules the robot-relative values came from
+        page.wait_for_selector("#verdict #task")
+        for field in task["rules"]:
+            assert page.locator(f"#task li[data-field='{field}']").count() == 1
+    page.screenshot(path=shots / "job-infeasible.png", full_page=True)
+
+    page.goto(f"{stack.url}/#/job/{good_id}")
+    page.wait_for_selector("#verdict.feasible h2")
+    assert page.inner_text("#verdict h2").startswith("Feasible")
+    assert _color(page, "#verdict h2") == GREEN
+    assert page.locator("#violations").count() == 0
+    page.screenshot(path=shots / "job-feasible.png", full_page=True)
     assert not page.legopt_errors, page.legopt_errors
 
 

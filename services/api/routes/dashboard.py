@@ -60,6 +60,11 @@ def job_filter(
             "tags, seed (`seed=3`), job and sweep ids.",
         ),
     ] = None,  # fmt: skip
+    feasible: Annotated[
+        bool | None,
+        Query(description="Only succeeded jobs whose optimum is feasible (true) / infeasible "
+              "(false)."),
+    ] = None,  # fmt: skip
 ) -> dq.JobFilter:
     """The filters of the jobs page (query parameters)."""
     return dq.JobFilter(
@@ -70,6 +75,7 @@ def job_filter(
         sweep_id=sweep_id or None,
         tag=tag or None,
         search=(q or "").strip() or None,
+        feasible=feasible,
     )
 
 
@@ -100,9 +106,10 @@ def dashboard_jobs(
         ),
     ] = None,
 ) -> JobRowPage:
-    """Study kind, robot, optimizer, status, progress, best value so far, times and tags of
-    each job. Everything is filtered, sorted and paged in the database (indexed), so a page
-    costs about the same at 10^5 jobs as at 10. Every order is the column, then newest first
+    """Study kind, robot, optimizer, status, the verdict of a succeeded job (`feasible`,
+    `violations`), progress, best value so far, times and tags of each job. Everything is
+    filtered, sorted and paged in the database (indexed), so a page costs about the same at
+    10^5 jobs as at 10. Every order is the column, then newest first
     (NULLs last); pass `cursor` (the previous page's `next_cursor`) to page by keyset at any
     depth, or `offset` (which costs more the deeper it goes)."""
     sync_labels(ctx, key.id)

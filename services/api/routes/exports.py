@@ -20,6 +20,7 @@ from services.api.schemas import ErrorOut, objective_names
 from services.api.sweep_cells import mean_sd
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
+from services.verdict import violations_text
 
 router = APIRouter(tags=["exports"])
 
@@ -29,9 +30,9 @@ _FILE: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "Not found (among yours)."},
 }
 JOB_COLUMNS = (
-    "id", "name", "kind", "robot", "optimizer", "seed", "tags", "status", "sweep_id",
-    "generation", "total_generations", "progress", "best", "created_at", "started_at",
-    "finished_at", "error",
+    "id", "name", "kind", "robot", "optimizer", "seed", "tags", "status", "feasible",
+    "violations", "sweep_id", "generation", "total_generations", "progress", "best",
+    "created_at", "started_at", "finished_at", "error",
 )  # fmt: skip
 #: Jobs read per query while the job list streams.
 EXPORT_PAGE = 1000
@@ -49,6 +50,10 @@ def _first(best: Any) -> Any:
     return best[0] if isinstance(best, list) and best else best
 
 
+def _violations(raw: Any) -> list[dict[str, Any]]:
+    return [v for v in raw if isinstance(v, dict)] if isinstance(raw, list) else []
+
+
 def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tuple[Any, ...]]:
     """Every job matching ``filters``, newest first, read by keyset pages."""
     cursor: str | None = None
@@ -61,7 +66,9 @@ def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tu
             j = r.job
             yield (
                 j.id, r.name, r.kind, r.robot, r.optimizer, r.seed, ",".join(r.tags),
-                j.status.value, j.sweep_id, j.progress_generation, j.total_generations,
+                j.status.value, j.feasible,
+                None if j.feasible is None else violations_text(_violations(j.violations)),
+                j.sweep_id, j.progress_generation, j.total_generations,
                 round(j.progress, 6), _first(j.best_objective), j.created_at, j.started_at,
                 j.finished_at, j.error_message,
             )  # fmt: skip
@@ -77,8 +84,10 @@ def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tu
 def export_jobs(
     key: CurrentKey, ctx: Context, filters: Filters, format: FormatQuery = "csv"
 ) -> StreamingResponse:
-    """Every job matching the jobs page's filters (newest first): labels, status, progress,
-    best value so far (first objective) and times."""
+    """Every job matching the jobs page's filters (newest first): labels, status, the verdict
+    of a succeeded job (``feasible``: true / false, empty when not checked; ``violations``: each
+    violated constraint with its amount and unit, in words, ``; ``-separated), progress, best
+    value so far (first objective) and times."""
     sync_labels(ctx, key.id)
     return _download(format, "jobs", JOB_COLUMNS, job_rows(ctx, key.id, filters))
 

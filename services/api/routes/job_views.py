@@ -165,17 +165,26 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
         best_index=best_index,
         baselines=marks,
         hypervolume_ref=ref,
-        paper=paper_numbers(spec, objective_quantities, kind),
+        paper=paper_numbers(spec, objective_quantities, kind, _task(result)),
     )
 
 
-def paper_numbers(spec: Any, objectives: list[Quantity], kind: str | None) -> PaperOut | None:
-    """The paper's numbers for the job's case: per metric its start and optimum, and on the
-    front its start / optimum where it printed every objective (none when an objective is
-    maximised: the front holds what the optimiser minimises)."""
+def _task(result: Any) -> Any:
+    """The task a job ran (stored in its result's summary), or None."""
+    summary = getattr(result, "summary", None)
+    return summary.get("task") if isinstance(summary, dict) else None
+
+
+def paper_numbers(
+    spec: Any, objectives: list[Quantity], kind: str | None, task: Any = None
+) -> PaperOut | None:
+    """The paper's numbers for the job's case — only on the paper's robot with the paper's
+    settings (``task``: the task the job ran, when known): per metric its start and optimum,
+    and on the front its start / optimum where it printed every objective (none when an
+    objective is maximised: the front holds what the optimiser minimises)."""
     from services.paper_numbers import paper_entry
 
-    entry = paper_entry(spec if isinstance(spec, dict) else None)
+    entry = paper_entry(spec if isinstance(spec, dict) else None, task)
     if entry is None:
         return None
     rows = {r.metric: r for r in entry.rows}

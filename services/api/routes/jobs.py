@@ -140,9 +140,18 @@ def list_jobs(
     ] = None,
     sweep_id: Annotated[str | None, Query(description="Only the jobs of this sweep.")] = None,
     id_prefix: IdPrefix = None,
+    feasible: Annotated[
+        bool | None,
+        Query(
+            description="Only succeeded jobs whose optimum is feasible (true) or infeasible "
+            "(false)."
+        ),
+    ] = None,
 ) -> Page[JobOut]:
-    """Your jobs, filtered by status (repeat the parameter for several), sweep and id prefix
-    (what `legopt status 2253` resolves: a range scan of the primary key)."""
+    """Your jobs, filtered by status (repeat the parameter for several), sweep, id prefix
+    (what `legopt status 2253` resolves: a range scan of the primary key) and verdict
+    (`feasible`). Each job carries its verdict once it succeeded: `feasible` and the
+    `violations` of its optimum."""
     with ctx.read() as session:
         jobs = repo.list_jobs(
             session,
@@ -150,6 +159,7 @@ def list_jobs(
             status=status_ or None,
             sweep_id=sweep_id,
             id_prefix=id_prefix or None,
+            feasible=feasible,
             limit=page.limit,
             offset=page.offset,
         )
@@ -164,8 +174,8 @@ def list_jobs(
 
 @router.get("/jobs/{job_id}", response_model=JobDetail, summary="One job", responses=_404)
 def get_job(job_id: str, key: CurrentKey, ctx: Context) -> JobDetail:
-    """Status, progress (generation / total), best objective so far, attempts, error,
-    warnings, timestamps and the spec."""
+    """Status, progress (generation / total), best objective so far, the verdict once it
+    succeeded (`feasible`, `violations`), attempts, error, warnings, timestamps and the spec."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         return JobDetail.from_record(job, repo.job_spec(session, job))
@@ -187,7 +197,9 @@ def _no_output(job: JobRecord, what: str) -> HTTPException:
     responses=_404,
 )
 def get_result(job_id: str, key: CurrentKey, ctx: Context) -> ResultOut:
-    """Best solution (x, objectives, metrics, per-joint table), baselines, artifacts."""
+    """Best solution (x, objectives, metrics, per-joint table), its verdict (`feasible`, the
+    `violations` with their amounts), the task it ran (`task`: parameters and the rules that
+    derived them from the robot), baselines (each with its own verdict), artifacts."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         result = repo.get_result(session, job.id)
@@ -195,7 +207,7 @@ def get_result(job_id: str, key: CurrentKey, ctx: Context) -> ResultOut:
             raise _no_output(job, "result")
         baselines = repo.list_baselines(session, job.id)
         artifacts = repo.list_artifacts(session, job.id)
-    out = ResultOut.from_records(result, baselines, artifacts)
+    out = ResultOut.from_records(result, baselines, artifacts, job)
     summary = out.summary
     if isinstance(summary, dict) and "extras" not in summary:
         out.summary = {**summary, "extras": _stored_extras(ctx, artifacts)}

@@ -255,6 +255,7 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
                 best_objective=job.best_objective,
                 objectives=objectives,
                 metrics=metrics,
+                feasible=job.feasible,
                 error=job.error_message,
             )
         )

@@ -201,7 +201,10 @@ def test_lifecycle_read_back(client: TestClient, ctx: ApiContext, alice: dict[st
     assert result["objective_names"] == ["energy", "time"]
     assert result["objectives"]["values"] == {"energy": 1.5, "time": 2.0}
     assert result["metrics"]["energy_J"] == 1.5
-    assert result["baselines"] == [{"name": "parabolic", "metrics": {"energy_J": 3.0}}]
+    assert result["baselines"] == [
+        {"name": "parabolic", "metrics": {"energy_J": 3.0}, "feasible": None, "violations": []}
+    ]  # (a baseline stored without its verdict: not checked)
+    assert result["feasible"] is None and result["violations"] == [] and result["task"] is None
     assert [a["kind"] for a in result["artifacts"]] == ["recording"]
 
     t0 = time.perf_counter()

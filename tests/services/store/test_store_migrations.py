@@ -45,7 +45,7 @@ def _round_trip(url: str) -> None:
     assert _diff(url), "an empty database must differ from the models"
 
     migrate.upgrade(url)
-    assert migrate.current_revision(url) == migrate.head_revision() == "0007"
+    assert migrate.current_revision(url) == migrate.head_revision() == "0008"
     assert migrate.is_up_to_date(url)
     assert TABLES <= _tables(url)
     assert _diff(url) == []
@@ -82,7 +82,7 @@ def test_alembic_ini_takes_the_url_from_x_argument(tmp_path: Path) -> None:
     cfg = Config(str(ini), cmd_opts=argparse.Namespace(x=[f"url={url}"]))
     cfg.attributes["configure_logger"] = False
     command.upgrade(cfg, "head")
-    assert migrate.current_revision(url) == "0007"
+    assert migrate.current_revision(url) == "0008"
     command.downgrade(cfg, "base")
     assert migrate.current_revision(url) is None
 

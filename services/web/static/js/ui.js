@@ -53,6 +53,31 @@ export function when(iso) {
 
 export function badge(status) { return h(`span.badge.${status}`, status); }
 
+/** One violated constraint with its amount and unit (as the CLI words it). */
+export function violationText(v) {
+  const size = `${num(v.amount)}${v.unit ? ` ${v.unit}` : ""}`;
+  const own = v.text && !v.text.startsWith(`${v.constraint} violated by`) ? ` — ${v.text}` : "";
+  return `${v.constraint} over its limit by ${size}${own}`;
+}
+
+/** A job's status with its verdict: a succeeded job whose optimum violates a constraint is a
+ *  red "infeasible" badge (never the green "succeeded"); one checked feasible is green; one
+ *  finished before the service checked says so. */
+export function jobBadge(job) {
+  if (job.status !== "succeeded") return badge(job.status);
+  if (job.feasible === false) {
+    const why = (job.violations || []).map(violationText).join("; ");
+    return h("span.badge.infeasible", { title: `succeeded, but the optimum is infeasible: ${why}`,
+      dataset: { verdict: "infeasible" } }, "infeasible");
+  }
+  if (job.feasible === true) {
+    return h("span.badge.succeeded", { title: "the optimum meets every constraint",
+      dataset: { verdict: "feasible" } }, "succeeded");
+  }
+  return h("span.badge.unchecked", { title: "feasibility not checked (finished before the service checked it)",
+    dataset: { verdict: "unchecked" } }, "succeeded");
+}
+
 export function bar(fraction, text) {
   const pct = Math.max(0, Math.min(1, fraction || 0)) * 100;
   return h("span", h("span.bar", h("i", { style: `width:${pct.toFixed(1)}%` })), " ", text);

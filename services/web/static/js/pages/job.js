@@ -1,11 +1,14 @@
 // One job: status and progress (polled while it runs), convergence (best per objective so far
 // and hypervolume per generation), the Pareto front (click a point, a table row or a baseline
 // to see that solution's joint signals and its Rerun recording), the front's points with their
-// objectives, metrics and decision variables, metrics, spec, downloads.
+// objectives, metrics and decision variables, metrics, spec, downloads. Once it succeeded, its
+// verdict first: red with each violated constraint and by how much when the reported optimum
+// is infeasible, green when it meets every constraint; and the task it ran (the rule that
+// derived each robot-relative parameter from its robot).
 import { api, download } from "../api.js";
 import { convergencePlot, frontPlot, jointPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
-import { badge, bar, best, clear, fill, h, num, shortId, TERMINAL, when } from "../ui.js";
+import { bar, best, clear, fill, h, jobBadge, num, shortId, TERMINAL, violationText, when } from "../ui.js";
 import { rerun } from "./jobs.js";
 
 const POLL_MS = 1500;
@@ -16,6 +19,7 @@ export async function render(main, jobId) {
   let alive = true;
   let timer = null;
   const head = h("div");
+  const verdict = h("div#verdict");
   const progress = h("div.card");
   const conv = h("div.plot.small#convergence");
   const frontEl = h("div.plot#front-plot");
@@ -32,7 +36,7 @@ export async function render(main, jobId) {
   let generations = [];
   let signal = "q";
 
-  main.append(head, progress,
+  main.append(head, verdict, progress,
     h("div.row",
       h("div.card.grow", h("h2", "Convergence"), conv),
       h("div.card.grow", h("h2", "Pareto front"), h("p.muted", "Click a point, a row or a baseline to see its motion."), frontEl)),
@@ -50,6 +54,7 @@ export async function render(main, jobId) {
     const job = await api(`/jobs/${jobId}`);
     if (!alive) return;
     drawHead(job);
+    drawVerdict(job);
     drawProgress(job);
     const page = await api(`/jobs/${jobId}/generations${lastGen === null ? "" : `?after=${lastGen}`}`);
     generations = generations.concat(page.items);
@@ -70,7 +75,7 @@ export async function render(main, jobId) {
 
   function drawHead(job) {
     fill(head, h("div.toolbar",
-      h("h1", job.name || `Job ${shortId(job.id)}`), badge(job.status),
+      h("h1", job.name || `Job ${shortId(job.id)}`), jobBadge(job),
       job.sweep_id ? h("a", { href: `#/sweep/${job.sweep_id}` }, `sweep ${shortId(job.sweep_id)}`) : null,
       h("span.spacer"),
       !TERMINAL.has(job.status) ? h("button.danger", { dataset: { action: "cancel" }, on: { click: async () => {
@@ -78,6 +83,37 @@ export async function render(main, jobId) {
       h("button.secondary", { dataset: { action: "rerun" }, on: { click: async () => { location.hash = `#/job/${(await rerun(job.id)).id}`; } } }, "Re-run (new seed)"),
       h("button.secondary", { dataset: { export: "spec" }, on: { click: () => download(`/jobs/${job.id}/spec.yaml`, "spec.yaml") } }, "Spec YAML"),
       job.status === "succeeded" ? h("button.secondary", { on: { click: () => download(`/jobs/${job.id}/recording`, "job.rrd") } }, "Recording .rrd") : null));
+  }
+
+  // The verdict of a succeeded job (GET /jobs/{id}: feasible, violations); the task's rules
+  // are added once the result is loaded.
+  let verdictJob = null;
+  function drawVerdict(job, task = null) {
+    verdictJob = job;
+    if (job.status !== "succeeded" || job.feasible === null || job.feasible === undefined) {
+      verdict.className = "";
+      fill(verdict, task ? h("div.card", taskBlock(task)) : null);
+      return;
+    }
+    const ok = job.feasible === true;
+    verdict.className = `card verdict ${ok ? "feasible" : "infeasible"}`;
+    verdict.dataset.verdict = ok ? "feasible" : "infeasible";
+    fill(verdict,
+      h("h2", ok ? "Feasible: the reported optimum meets every constraint"
+        : "Infeasible: the reported optimum violates a constraint"),
+      ok ? null : h("ul.violations#violations", job.violations.map((v) => h("li", { dataset: { constraint: v.constraint } }, violationText(v)))),
+      ok ? null : h("p.muted", "The run completed (status succeeded), but this answer breaks the constraints above: "
+        + "relax them, change the task, or give the optimiser more budget."),
+      task ? taskBlock(task) : null);
+  }
+
+  function taskBlock(task) {
+    const rules = Object.entries(task.rules || {});
+    if (!rules.length && !task.preset) return null;
+    return h("section#task", h("h2", "Task"),
+      task.preset ? h("p", `what the spec leaves out is the paper's: ${task.preset}`) : null,
+      rules.length ? h("p", "derived from the robot:") : null,
+      rules.length ? h("ul.task-rules", rules.map(([k, r]) => h("li", { dataset: { field: k } }, h("span.mono", k), `: ${r}`))) : null);
   }
 
   function drawProgress(job) {
@@ -98,6 +134,7 @@ export async function render(main, jobId) {
     const [f, result] = await Promise.all([api(`/jobs/${job.id}/front`), api(`/jobs/${job.id}/result`)]);
     if (!alive) return;
     front = f;
+    if (result.task && verdictJob) drawVerdict(verdictJob, result.task);
     if (generations.length) convergencePlot(conv, generations, front.objectives);
     frontPlot(frontEl, front, pick);
     drawFrontTable();
@@ -187,7 +224,16 @@ export async function render(main, jobId) {
     fill(metrics, earnedBlock(result), h("h2", "Metrics of the reported optimum"),
       h("table#metrics-table", h("thead", h("tr", h("th", "metric"), h("th", "name"), h("th.num", "optimum"), h("th", "unit"),
         paper ? h("th.num", { title: front.paper.source }, "paper: start → optimum") : null,
-        front.baselines.map((b) => h("th.num", `baseline ${b.name}`)))), h("tbody", rows)));
+        front.baselines.map((b) => baselineHead(b.name, result)))), h("tbody", rows)));
+  }
+
+  // A baseline's column: its name, and "infeasible" in red when it violates a constraint on
+  // this robot (a change against it would mean nothing).
+  function baselineHead(name, result) {
+    const rec = (result.baselines || []).find((x) => x.name === name);
+    if (!rec || rec.feasible !== false) return h("th.num", `baseline ${name}`);
+    return h("th.num", { title: rec.violations.map(violationText).join("; ") }, `baseline ${name} `,
+      h("span.error", "(infeasible)"));
   }
 
   // What the optimiser earned: its initial population's best and the solution the encoding

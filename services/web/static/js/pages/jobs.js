@@ -1,8 +1,9 @@
 // The jobs page: filter, sort, search and page your jobs (all done by the API in SQL), watch
 // their progress (short polling while any is queued or running), cancel, re-run, submit a new
-// job, download the list.
+// job, download the list. A succeeded job whose optimum violates a constraint shows a red
+// "infeasible" badge in place of the green "succeeded" (the verdict filter finds them).
 import { api, download, idempotencyKey, query } from "../api.js";
-import { badge, bar, best, clear, h, shortId, TERMINAL, when } from "../ui.js";
+import { bar, best, clear, h, jobBadge, shortId, TERMINAL, when } from "../ui.js";
 
 const POLL_MS = 2000;
 const COLUMNS = [
@@ -17,6 +18,7 @@ function stateFromHash(hash) {
   const q = new URLSearchParams((hash.split("?")[1]) || "");
   return { q: q.get("q") || "", kind: q.get("kind") || "", optimizer: q.get("optimizer") || "",
     robot: q.get("robot") || "", status: q.getAll("status"), sweep_id: q.get("sweep_id") || "",
+    feasible: q.get("feasible") || "",
     sort: q.get("sort") || "created", order: q.get("order") || "desc", limit: 50 };
 }
 
@@ -32,6 +34,8 @@ export async function render(main, _param, hash) {
   const optimizer = h("select", h("option", { value: "" }, "all optimizers"),
     options.optimizers.map((o) => h("option", { value: o.value, selected: o.value === st.optimizer }, o.label)));
   const robot = h("input", { placeholder: "robot", value: st.robot, size: 14 });
+  const verdict = h("select#verdict-filter", h("option", { value: "" }, "any verdict"),
+    [["true", "feasible"], ["false", "infeasible"]].map(([v, label]) => h("option", { value: v, selected: v === st.feasible }, label)));
   const statusBoxes = options.statuses.map((s) => h("label", h("input", { type: "checkbox", value: s,
     checked: st.status.includes(s) }), " ", s));
   const info = h("span.muted");
@@ -40,10 +44,10 @@ export async function render(main, _param, hash) {
 
   const filters = () => ({ q: search.value.trim(), kind: kind.value, optimizer: optimizer.value,
     robot: robot.value.trim(), status: statusBoxes.map((l) => l.firstChild).filter((c) => c.checked).map((c) => c.value),
-    sweep_id: st.sweep_id });
+    sweep_id: st.sweep_id, feasible: verdict.value });
 
   function restart() { st.cursors = [null]; st.page = 0; load(); }
-  for (const el of [kind, optimizer, ...statusBoxes.map((l) => l.firstChild)]) el.addEventListener("change", restart);
+  for (const el of [kind, optimizer, verdict, ...statusBoxes.map((l) => l.firstChild)]) el.addEventListener("change", restart);
   let debounce = null;
   for (const el of [search, robot]) el.addEventListener("input", () => { clearTimeout(debounce); debounce = setTimeout(restart, 300); });
 
@@ -55,7 +59,7 @@ export async function render(main, _param, hash) {
         on: { click: () => download(`/export/jobs${query({ ...filters(), format: f })}`, `jobs.${f}`) } }, f.toUpperCase()))),
     newJob,
     h("div.card",
-      h("div.toolbar", search, kind, optimizer, robot, ...statusBoxes,
+      h("div.toolbar", search, kind, optimizer, robot, verdict, ...statusBoxes,
         st.sweep_id ? h("span.tag", `sweep ${shortId(st.sweep_id)}`) : null, h("span.spacer"), info),
       h("div.scroll", { style: "max-height:none" }, table), pager));
 
@@ -92,9 +96,10 @@ export async function render(main, _param, hash) {
     }))));
     const body = h("tbody");
     for (const j of items) {
-      const tr = h("tr.clickable", { dataset: { job: j.id, status: j.status } },
+      const verdictOf = j.feasible === true ? "feasible" : j.feasible === false ? "infeasible" : "";
+      const tr = h("tr.clickable", { dataset: { job: j.id, status: j.status, verdict: verdictOf } },
         h("td", h("a", { href: `#/job/${j.id}` }, j.name || shortId(j.id)), j.name ? h("div.muted.mono", shortId(j.id)) : null),
-        h("td", j.kind), h("td", j.robot), h("td", j.optimizer), h("td", badge(j.status)),
+        h("td", j.kind), h("td", j.robot), h("td", j.optimizer), h("td", jobBadge(j)),
         h("td", bar(j.progress, `${j.generation}/${j.total_generations || "?"}`)),
         h("td.num", best(j.best_objective)), h("td", when(j.created_at)), h("td", when(j.finished_at)),
         h("td", j.tags.map((t) => h("span.tag", t)), j.sweep_id ? h("a.tag", { href: `#/sweep/${j.sweep_id}` }, "sweep") : null),
