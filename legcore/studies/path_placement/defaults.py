@@ -29,7 +29,9 @@ field the user left unset, by these rules (recorded with their numbers in ``Task
 - **the nominal power** (``nominal_power_kw``): Σ τ_max,i q̇_max,i, the combined peak
   mechanical power of the joints at their torque and speed limits — the power constraint then
   follows from the joint limits and P_n only scales the energy term of the cost. A joint
-  without a torque or speed limit: refused, naming ``nominal_power_kw`` (give it).
+  without a torque limit (a DH table without ``tau_max``, e.g. an edited PUMA 560) counts with
+  :data:`MOTOR_SIZING` × its largest gravity torque over the sampled workspace (a motor sized
+  with that margin over its static load), said in the rule.
 
 Other fields (the energy weight, the anchor, the timing, the branch rule) are robot
 independent; ``max_manipulability`` is the arm's own (computed when the problem is built).
@@ -45,6 +47,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from legcore.dynamics import inverse_dynamics
 from legcore.robots.model import Robot
 from legcore.studies.arm_workspace import arm_workspace, centres
 from legcore.studies.path_placement.params import Params
@@ -62,6 +65,10 @@ SPEED_SHARE = 0.5
 #: Well-conditioned postures tried for the original placement.
 CENTRES_TRIED = 4
 _PAPER_DURATION = {"pan": PAN_DURATION, "jar": JAR_DURATION}
+
+#: A joint without a torque limit counts with this multiple of its largest gravity torque (a
+#: motor sized with a margin of 2 over its static load) in the derived nominal power.
+MOTOR_SIZING = 2.0
 
 
 def puma560_reach() -> float:
@@ -99,6 +106,21 @@ def _corners(region: Any) -> FloatArray:
                      for i in (0, 1) for j in (0, 1) for k in (0, 1)])
 
 
+def _torque_limits(robot: Robot, q: FloatArray) -> tuple[FloatArray, list[str]]:
+    """Each joint's torque limit (n,) N·m — a joint without one (infinite) gets
+    :data:`MOTOR_SIZING` × its largest gravity torque over the configurations ``q`` (N, n) —
+    and the names of the joints whose limit was so estimated."""
+    tau = np.asarray(robot.tau_max, dtype=float).copy()
+    free = ~np.isfinite(tau)
+    if not free.any():
+        return tau, []
+    zero = np.zeros_like(q)
+    gravity = np.abs(inverse_dynamics(robot, q, zero, zero)).max(axis=0)
+    tau[free] = MOTOR_SIZING * np.maximum(gravity[free], 1e-3)
+    names = [str(robot.model.names[int(j) + 1]) for j in np.flatnonzero(free)]
+    return tau, names
+
+
 def derive(robot: Any, params: Params) -> Task:
     """The fields of ``params`` the user left unset, by the rules of the module docstring,
     and the pre-flight check (``ValueError("<field>: …")``)."""
@@ -109,17 +131,14 @@ def derive(robot: Any, params: Params) -> Task:
     values: dict[str, Any] = {}
     ws = arm_workspace(robot)
     if "nominal_power_kw" not in given:
-        P = robot.tau_max * robot.qd_max
-        if not np.all(np.isfinite(P)):
-            free = [str(robot.model.names[int(j) + 1]) for j in np.flatnonzero(~np.isfinite(P))]
-            raise ValueError(
-                f"nominal_power_kw: {robot.name} gives no torque or speed limit for joints "
-                f"{free}, so its nominal power cannot be derived (Σ τ_max q̇_max); give "
-                f"nominal_power_kw (kW)")
+        tau, estimated = _torque_limits(robot, ws.q)
+        P = tau * robot.qd_max
         values["nominal_power_kw"] = float(f"{P.sum() / 1000.0:.4g}")
         rules["nominal_power_kw"] = (
             f"{P.sum() / 1000.0:.4g} kW = Σ τ_max,i q̇_max,i of the joints (their combined peak "
-            f"mechanical power): the power constraint follows from the torque and speed limits")
+            f"mechanical power): the power constraint follows from the torque and speed limits"
+            + (f"; no torque limit on {estimated}: {MOTOR_SIZING:g} × the joint's largest "
+               "gravity torque over the sampled workspace" if estimated else ""))
     builtin = params.path != "csv"
     if builtin and "path_scale" not in given:
         scale = float(f"{ws.reach / puma560_reach():.3g}")
