@@ -56,7 +56,7 @@ def violation_text(v: Mapping[str, Any]) -> str:
         size = _number(float(amount)) + (f" {unit}" if unit else "")
     out = f"{name} over its limit by {size}"
     text = str(v.get("text") or "").strip()
-    if text and not text.startswith(f"{name} violated by"):  # not legcore's default wording
+    if text:  # the study's own words
         out += f" — {text}"
     return out
 

@@ -128,9 +128,10 @@ class Violation:
     text: str = ""
 
     def as_dict(self) -> dict[str, Any]:
+        """JSON-able; ``text`` empty when the study gave no words (a reader words the
+        constraint and amount itself)."""
         return {"constraint": self.constraint, "amount": float(self.amount), "unit": self.unit,
-                "text": self.text or f"{self.constraint} violated by {self.amount:.4g}"
-                                     f"{(' ' + self.unit) if self.unit else ''}"}
+                "text": self.text}
 
 
 @dataclass(frozen=True)

@@ -56,7 +56,7 @@ export function badge(status) { return h(`span.badge.${status}`, status); }
 /** One violated constraint with its amount and unit (as the CLI words it). */
 export function violationText(v) {
   const size = `${num(v.amount)}${v.unit ? ` ${v.unit}` : ""}`;
-  const own = v.text && !v.text.startsWith(`${v.constraint} violated by`) ? ` — ${v.text}` : "";
+  const own = v.text ? ` — ${v.text}` : "";
   return `${v.constraint} over its limit by ${size}${own}`;
 }
 
