@@ -33,11 +33,13 @@ def _print_params(item: dict[str, Any]) -> None:
     t = Table(title=f"{item['kind']}: parameters (problem.*)")
     for col in ("name", "type", "default", "description"):
         t.add_column(col, overflow="fold")
+    derived = set(item.get("robot_relative") or ())
     for name, prop in props.items():
         if name == "kind":
             continue
         default = item["defaults"].get(name)
-        t.add_row(name, _type(prop), _short(default), str(prop.get("description", "")))
+        shown = "from the robot" if name in derived and default is None else _short(default)
+        t.add_row(name, _type(prop), shown, str(prop.get("description", "")))
     console.print(t)
 
 

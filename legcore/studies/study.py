@@ -212,9 +212,11 @@ class Study:
 
     ``derive(robot, params) -> Task``: the robot-relative defaults and the pre-flight check
     (:mod:`legcore.studies.task`); ``preset``: the paper's settings on its own robot, applied
-    before ``derive``. :meth:`task` runs both. ``build`` is wrapped on creation so that it
-    refuses a robot :meth:`refusal` rejects with ``ValueError("robot: <kind> needs …")``, then
-    builds the study's problem from :meth:`task`'s parameters (``problem.task`` keeps them).
+    before ``derive``; ``robot_relative``: the parameters ``derive`` fills from the robot when
+    left out (listings show them as "from the robot"). :meth:`task` runs both. ``build`` is
+    wrapped on creation so that it refuses a robot :meth:`refusal` rejects with
+    ``ValueError("robot: <kind> needs …")``, then builds the study's problem from
+    :meth:`task`'s parameters (``problem.task`` keeps them).
     """
 
     kind: str
@@ -231,6 +233,7 @@ class Study:
     plugin: str | None = None
     derive: Callable[[Any, Any], Task] | None = None
     preset: Preset | None = None
+    robot_relative: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         inner = getattr(self.build, "_unchecked", self.build)

@@ -506,6 +506,10 @@ STUDY = HexapodStudy(
     build=build,
     derive=derive,
     preset=PRESET,
+    robot_relative=(
+        'theta2', 'theta3', 'theta1_min', 'theta1_max', 'pose_x_extent', 'pose_y_extent',
+        'pose_xy_step', 'pose_yaw_extent', 'pose_yaw_step', 'hv_ref_point',
+    ),
     robot_kinds=("legged",),
     needs=(Needs(legged=True, n_legs=(6,), leg_joints=(3, 3), revolute=True),),
     description=(

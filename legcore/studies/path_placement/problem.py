@@ -434,6 +434,10 @@ STUDY = Study(
     needs=(NEEDS,),
     derive=derive,
     preset=PRESET,
+    robot_relative=(
+        'path_scale', 'path_axis', 'spin', 'original', 'region', 'postures', 'duration',
+        'nominal_power_kw',
+    ),
     description=(
         "Where to put a tool path (welding seam, CSV of poses) in front of an arm so that it "
         "runs it with the least energy — electrical where the robot has motor data, "

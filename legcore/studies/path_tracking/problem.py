@@ -485,6 +485,10 @@ STUDY = Study(
     needs=(NEEDS,),
     derive=derive,
     preset=PRESET,
+    robot_relative=(
+        'segments', 'plane_origin', 'plane_e1', 'plane_e2', 'orientation', 'rest', 'V',
+        'V_bounds',
+    ),
     description=(
         "An arm runs a fixed path of lines and arcs in any plane, its tool pointing down, "
         "along a fixed axis or free; the cruise speed of each segment and the ramp times are "

@@ -523,6 +523,10 @@ STUDY = Study(
     robot_kinds=("legged",),
     derive=derive,
     preset=PRESET,
+    robot_relative=(
+        'depth', 'q_ref', 'stroke_center', 'step_length', 'step_height',
+        'step_length_bounds', 'step_height_bounds', 'speed', 'stability_margin',
+    ),
     needs=(Needs(legged=True, n_legs=(4,), leg_joints=(2, 3), revolute=True),),
     description=(
         "A quadruped (four legs of 2-3 joints, one at each corner) walks the 4-beat walk; "

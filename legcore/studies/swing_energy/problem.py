@@ -772,6 +772,10 @@ STUDY = Study(
     robot_kinds=("serial", "legged"),
     derive=derive,
     preset=PRESET,
+    robot_relative=(
+        'leg', 'q_start', 'q_end', 'exact_ends', 'step_height', 'w_d', 'w_a',
+        'search_range', 'tube', 'lift_only',
+    ),
     needs=(
         Needs(serial=True, min_joints=2, max_joints=6, revolute=True),
         Needs(legged=True, leg_joints=(2, 6), revolute=True),

@@ -63,6 +63,10 @@ class StudyOut(BaseModel):
     default_generations: int
     params_schema: dict[str, Any] = Field(description="JSON Schema of the job's `problem`.")
     defaults: dict[str, Any] = Field(description="`problem` with every default filled in.")
+    robot_relative: list[str] = Field(
+        default_factory=list, description="The parameters whose default is derived from the "
+        "robot a job runs on (null in `defaults`; each job's result says the value and the rule)."
+    )
     robots: list[RobotFit]
 
 
@@ -138,6 +142,7 @@ def list_studies(
             default_generations=s.default_generations,
             params_schema=s.params.model_json_schema(),
             defaults=s.params.model_validate({}).model_dump(mode="json"),
+            robot_relative=list(s.robot_relative),
             robots=[_fit(s, *c) for c in candidates],
         )
         for s in chosen

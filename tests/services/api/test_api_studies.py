@@ -29,6 +29,11 @@ def test_every_kind_lists_schema_defaults_and_robot_fits(
     refused = [f for s in body["items"] for f in s["robots"] if not f["accepted"]]
     assert refused and all(len(f["reason"]) > 10 for f in refused)
     assert body["stored_robots_total"] == 0
+    # the parameters derived from the robot are named, and their default is left to the robot
+    for kind, s in kinds.items():
+        assert s["robot_relative"] == list(studies()[kind].robot_relative), kind
+        assert all(s["defaults"][f] is None for f in s["robot_relative"]), kind
+    assert "q_start" in kinds["swing_energy"]["robot_relative"]
 
 
 def test_one_kind_without_robots_and_an_unknown_kind(
