@@ -20,6 +20,7 @@ from urllib.parse import urlsplit
 
 import pytest
 
+from tests.gait_specs import GAIT, UNSTABLE
 from tests.integration.stack import Stack
 
 pytestmark = pytest.mark.integration
@@ -54,29 +55,10 @@ LONG: dict[str, Any] = {
     "record": False,
     "budget": {"generations": 5000},  # the API's limit
 }
-#: Seed 003's walk with every parameter given (independent of the study's robot-relative
-#: defaults), two generations of a small HKA: a few seconds of the worker. FEASIBLE_GAIT meets
-#: its 1 mm static margin; INFEASIBLE_GAIT asks for 20 mm, which no step of its search box
-#: has (the best keeps ~2.4 mm): it succeeds with an infeasible optimum.
-FEASIBLE_GAIT: dict[str, Any] = {
-    "name": "browser gait, 1 mm margin",
-    "robot": "animatronic_quadruped",
-    "problem": {
-        "kind": "quadruped_gait", "stability_margin": 0.001, "step_length": 0.08,
-        "step_height": 0.03, "duty": 0.8, "speed": 0.03, "depth": 0.1648,
-        "stroke_center": -0.0012, "step_length_bounds": [0.04, 0.13],
-        "step_height_bounds": [0.01, 0.05], "duty_bounds": [0.75, 0.9],
-    },
-    "optimizer": {"kind": "hka", "params": {"n_samples": 20, "survey_size": 40}},
-    "budget": {"generations": 2},
-    "seed": 1,
-    "record": False,
-}  # fmt: skip
-INFEASIBLE_GAIT: dict[str, Any] = {
-    **FEASIBLE_GAIT,
-    "name": "browser gait, 20 mm margin",
-    "problem": {**FEASIBLE_GAIT["problem"], "stability_margin": 0.02},
-}
+#: Seed 003's walk with its verdict known (tests/gait_specs.py): feasible, and one asking for a
+#: margin no step has, which succeeds with an infeasible optimum.
+FEASIBLE_GAIT: dict[str, Any] = {**GAIT, "name": "browser gait, 1 mm margin"}
+INFEASIBLE_GAIT: dict[str, Any] = {**UNSTABLE, "name": "browser gait, 20 mm margin"}
 #: The stylesheet's red and green (--bad, --ok), as the browser computes them.
 RED, GREEN = "rgb(192, 57, 43)", "rgb(31, 138, 76)"
 TIMEOUT_MS = 60_000

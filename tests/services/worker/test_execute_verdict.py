@@ -16,23 +16,7 @@ from services.store.keys import generate_api_key
 from services.store.session import session_scope
 from services.store.settings import Settings
 from services.worker import execute
-
-#: Seed 003's walk with every parameter given; two generations of a small HKA (~3 s).
-GAIT: dict[str, Any] = {
-    "robot": "animatronic_quadruped",
-    "problem": {
-        "kind": "quadruped_gait", "stability_margin": 0.001, "step_length": 0.08,
-        "step_height": 0.03, "duty": 0.8, "speed": 0.03, "depth": 0.1648,
-        "stroke_center": -0.0012, "step_length_bounds": [0.04, 0.13],
-        "step_height_bounds": [0.01, 0.05], "duty_bounds": [0.75, 0.9],
-    },
-    "optimizer": {"kind": "hka", "params": {"n_samples": 20, "survey_size": 40}},
-    "budget": {"generations": 2},
-    "seed": 1,
-    "record": False,
-}  # fmt: skip
-#: ...asked for a 20 mm static margin: no step of the search box has more than ~2.4 mm.
-UNSTABLE = {**GAIT, "problem": {**GAIT["problem"], "stability_margin": 0.02}}
+from tests.gait_specs import GAIT, UNSTABLE
 
 
 def _run(spec: dict[str, Any], settings: Settings) -> tuple[Any, dict[str, Any], Any]:
