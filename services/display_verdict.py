@@ -35,13 +35,15 @@ def _rules(task: Mapping[str, Any] | None) -> dict[str, str]:
 def task_line(task: Mapping[str, Any] | None) -> Text | None:
     """One line on the task a job ran (``{params, rules, preset}``): the rule that derived
     each robot-relative value (``task derived from the robot: depth: 0.6 × leg length …;
-    step_length: …``), cut at the console's width (:func:`task_lines` has them whole); None
-    when nothing was derived (every value given, the paper's preset on its robot, or a result
-    stored without its task)."""
+    step_length: …``; on the paper's robot, what its preset leaves to the robot), cut at the
+    console's width (:func:`task_lines` has them whole); None when nothing was derived (every
+    value given, or a result stored without its task)."""
     rules = _rules(task)
     if not rules:
         return None
-    text = "  task derived from the robot: " + "; ".join(f"{k}: {r}" for k, r in rules.items())
+    head = ("  task: the paper's settings; the rest derived from the robot: "
+            if (task or {}).get("preset") else "  task derived from the robot: ")
+    text = head + "; ".join(f"{k}: {r}" for k, r in rules.items())
     return Text(text, style="cyan", no_wrap=True, overflow="ellipsis")
 
 
