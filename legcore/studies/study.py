@@ -1,9 +1,10 @@
-"""What a seed study adds on top of a plain `Problem`: parameters, decoded solutions, baselines.
+"""What a study adds on top of a plain `Problem`: parameters, decoded solutions, baselines.
 
 A study package (``legcore/studies/<kind>/``) defines
 
 - ``Params`` — a :class:`StudyParams` subclass with ``kind: Literal["<kind>"]`` and the study's
-  parameters, every default being the seed paper's own setting;
+  parameters; a robot-relative one defaults to None, filled from the robot by the study's
+  ``derive`` (``defaults.py``) or, on the paper's own robot, by its ``Preset`` (``preset.py``);
 - a :class:`StudyProblem` subclass — vectorised ``_evaluate``, plus ``solution(x)`` (the full
   decoded trajectory with metrics) and ``baseline_solutions()`` (the paper's reference
   trajectories, decoded the same way);

@@ -52,6 +52,7 @@ from legcore.robots.model import Robot
 from legcore.studies.arm_workspace import arm_workspace, centres
 from legcore.studies.path_placement.params import Params
 from legcore.studies.path_placement.paths import JAR_DURATION, PAN_DURATION, oriented
+from legcore.studies.path_placement.region import BoxRegion
 from legcore.studies.task import Task
 
 __all__ = ["CENTRES_TRIED", "REGION_SIZES", "SPEED_SHARE", "derive", "puma560_reach"]
@@ -315,8 +316,11 @@ def _finish(robot: Robot, params: Params, ws: Any, base: FloatArray, pr: Any, tr
         fixed["original"] = tuple(float(v) for v in x0)
         rel = c.p - ws.shoulder
         height = float(rel @ ws.up)
+        box = isinstance(pr.workspace, BoxRegion)  # x = (x, y, z) m, else (R m, γ rad, φ rad)
+        units = ("m", "m", "m") if box else ("m", "rad", "rad")
+        coords = ", ".join(f"{v:.4f} {u}" for v, u in zip(x0, units, strict=True))
         rules["original"] = (
-            f"({x0[0]:.4f} m, {x0[1]:.4f} rad, {x0[2]:.4f} rad): the path's centroid at "
+            f"({coords}): the path's centroid at "
             f"{_vec(c.p)} m ({float(np.linalg.norm(rel - height * ws.up)):.3f} m from the base "
             f"axis, {height:+.3f} m above the shoulder), a well-conditioned posture holding the "
             f"path's mean tool axis (dexterity {c.dexterity:.3f}); the whole path is reachable "

@@ -116,8 +116,8 @@ class Params(StudyParams):
     - ``energy_weight``: PC of eq 15 in [0, 1] (PM = 1 − PC). The paper does not give it.
     - ``nominal_power_kw``: P_n of eq 15 and of the power constraint (kW); None: Σ τ_max,i
       q̇_max,i of the arm's joints (their combined peak mechanical power; the power constraint
-      then follows from the torque and speed limits) — a refusal naming this field when some
-      joint has no torque or speed limit (the preset: 0.4 kW, assumed for the PUMA 560).
+      then follows from the torque and speed limits; a joint without a torque limit counts
+      with 2 × its largest gravity torque) (the preset: 0.4 kW, assumed for the PUMA 560).
     - ``max_manipulability``: w_M of eq 15 (m³); default: computed from the robot.
     - ``branch``: ``"best"`` (per candidate, the best IK branch for the whole path) or one of
       the PUMA-type closed form's 8 branch names.
