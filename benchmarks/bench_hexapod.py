@@ -31,7 +31,8 @@ from legcore.metrics import hypervolume
 from legcore.optimizers import MaxGenerations, get_algorithm, minimize
 from legcore.optimizers.moead import lattice_divisions
 from legcore.robots import catalog
-from legcore.studies.hexapod_workspace.problem import HV_REF, Params, build
+from legcore.studies.hexapod_workspace.problem import HV_REF, Params
+from legcore.studies.hexapod_workspace.study import build
 
 REF = np.asarray(HV_REF)
 

@@ -33,7 +33,8 @@ from legcore.studies.swing_energy.geometry import (
     segment_box_depth,
     travel_and_peak,
 )
-from legcore.studies.swing_energy.problem import Params, SwingEnergyProblem, build
+from legcore.studies.swing_energy.problem import Params, SwingEnergyProblem
+from legcore.studies.swing_energy.study import build
 from legcore.trajectories.sampling import compose_time_law
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

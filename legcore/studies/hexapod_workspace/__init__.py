@@ -6,6 +6,7 @@ parameters; ``HexapodWorkspaceProblem`` the vectorised problem (:mod:`.problem`)
 """
 
 from legcore.studies.hexapod_workspace.params import Params
-from legcore.studies.hexapod_workspace.problem import STUDY, HexapodWorkspaceProblem
+from legcore.studies.hexapod_workspace.problem import HexapodWorkspaceProblem
+from legcore.studies.hexapod_workspace.study import STUDY
 
 __all__ = ["STUDY", "Params", "HexapodWorkspaceProblem"]

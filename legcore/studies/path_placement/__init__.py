@@ -6,6 +6,7 @@ parameters; ``PathPlacementProblem`` the vectorised problem (:mod:`.problem`).
 """
 
 from legcore.studies.path_placement.params import Params
-from legcore.studies.path_placement.problem import STUDY, PathPlacementProblem
+from legcore.studies.path_placement.problem import PathPlacementProblem
+from legcore.studies.path_placement.study import STUDY
 
 __all__ = ["STUDY", "Params", "PathPlacementProblem"]

@@ -9,13 +9,8 @@ from typing import Any
 import numpy as np
 
 from legcore.robots.model import Robot
-from legcore.studies.path_placement.problem import (
-    HKA_PARAMS,
-    STUDY,
-    Params,
-    PathPlacementProblem,
-    build,
-)
+from legcore.studies.path_placement.problem import Params, PathPlacementProblem
+from legcore.studies.path_placement.study import HKA_PARAMS, STUDY, build
 
 __all__ = ["compare_initialisations"]
 

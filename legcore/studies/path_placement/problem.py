@@ -65,7 +65,6 @@ from legcore.kinematics import manipulability, manipulability_split
 from legcore.robots.capabilities import Needs
 from legcore.robots.model import Robot
 from legcore.studies.path_placement import report
-from legcore.studies.path_placement.defaults import derive
 from legcore.studies.path_placement.joints import gradient, placed_path_joints
 from legcore.studies.path_placement.manipulability import max_manipulability
 from legcore.studies.path_placement.params import (
@@ -75,7 +74,6 @@ from legcore.studies.path_placement.params import (
     Params,
     constraint_names,
 )
-from legcore.studies.path_placement.preset import PRESET
 from legcore.studies.path_placement.region import (
     Region,
     SphericalWorkspace,
@@ -84,20 +82,17 @@ from legcore.studies.path_placement.region import (
     region_of,
     simplified_workspace,
 )
-from legcore.studies.study import Solution, Study, StudyProblem
+from legcore.studies.study import Solution, StudyProblem
 from legcore.studies.task import Violation
 
 __all__ = [
     "CONSTRAINT_NAMES",
-    "HKA_PARAMS",
     "NEEDS",
     "PAPER",
     "PUMA560_NOMINAL_POWER_KW",
     "Params",
     "PathPlacementProblem",
-    "STUDY",
     "SphericalWorkspace",
-    "build",
     "max_manipulability",
     "simplified_workspace",
 ]
@@ -393,58 +388,3 @@ class PathPlacementProblem(StudyProblem):
                      "duration_s": self.path.duration, "length_m": self.path.length},
             "paper": PAPER.get(self.path.name, {}),
         }
-
-
-def build(robot: Robot, params: Params) -> PathPlacementProblem:
-    """The problem for ``robot`` (a serial arm of ≥ 6 joints) and validated ``params``; the
-    fields left None are filled as a submission fills them (``STUDY.task``: the preset on the
-    seed's PUMA 560, the robot-relative rules elsewhere) when the caller did not."""
-    if not isinstance(params, Params):
-        params = Params.model_validate(params)
-    if isinstance(robot, Robot) and robot.nq >= 6 and (
-            params.nominal_power_kw is None or params.path_scale is None):
-        params = STUDY.task(robot, params).params
-    return PathPlacementProblem(robot, params)
-
-
-#: HKA settings of this study: seed 001 does not publish N, N_ξ, α, its survey step nor ϖ
-#: (``penalty``); these converge in ~20 generations on both built-in paths (see the docs).
-HKA_PARAMS: dict[str, Any] = {
-    "n_samples": 30,
-    "n_best": 6,
-    "alpha": 0.6,
-    "init": "survey",
-    "survey_size": 216,
-    "survey_best": 5,
-    "penalty": 1e3,
-    "spread_tol": 1e-4,
-}
-
-STUDY = Study(
-    kind="path_placement",
-    title="Placement of a tool path for energy and manipulability, any arm of ≥ 6 joints "
-          "(seed 001)",
-    seed_paper="001",
-    params=Params,
-    default_robot="puma560",
-    default_optimizer={"kind": "hka", "params": dict(HKA_PARAMS)},
-    default_generations=30,
-    build=build,
-    robot_kinds=("serial",),
-    needs=(NEEDS,),
-    derive=derive,
-    preset=PRESET,
-    robot_relative=(
-        'path_scale', 'path_axis', 'spin', 'original', 'region', 'postures', 'duration',
-        'nominal_power_kw',
-    ),
-    description=(
-        "Where to put a tool path (welding seam, CSV of poses) in front of an arm so that it "
-        "runs it with the least energy — electrical where the robot has motor data, "
-        "mechanical otherwise — and the best manipulability, under joint position, speed and "
-        "power limits. The anchor goes in a sphere, spherical shell or box of the base frame. "
-        "Default: the paper's path scaled to the arm's reach, in a well-conditioned region "
-        "around a reachable and feasible original placement. Preset: seed 001's pan and jar "
-        "paths on the PUMA 560 with HKA."
-    ),
-)

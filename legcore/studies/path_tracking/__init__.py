@@ -5,6 +5,7 @@ parameters; ``PathTrackingProblem`` the vectorised problem (:mod:`.problem`).
 """
 
 from legcore.studies.path_tracking.params import Params
-from legcore.studies.path_tracking.problem import STUDY, PathTrackingProblem
+from legcore.studies.path_tracking.problem import PathTrackingProblem
+from legcore.studies.path_tracking.study import STUDY
 
 __all__ = ["STUDY", "Params", "PathTrackingProblem"]

@@ -60,7 +60,6 @@ from legcore.problems.base import constraint_violation
 from legcore.robots.capabilities import Needs
 from legcore.robots.model import Robot
 from legcore.studies.path_tracking import limits
-from legcore.studies.path_tracking.defaults import derive
 from legcore.studies.path_tracking.joints import (
     JointPath,
     check_slowest_speed,
@@ -76,14 +75,13 @@ from legcore.studies.path_tracking.params import (
     LineSegment,
     Params,
 )
-from legcore.studies.path_tracking.preset import PRESET
 from legcore.studies.path_tracking.timelaw import (
     RampShape,
     TimeLaw,
     build_time_law,
     segment_profiles,
 )
-from legcore.studies.study import Motion, Solution, Study, StudyProblem
+from legcore.studies.study import Motion, Solution, StudyProblem
 from legcore.studies.task import Violation
 from legcore.trajectories.sampling import compose_time_law
 
@@ -96,8 +94,6 @@ __all__ = [
     "LineSegment",
     "Params",
     "PathTrackingProblem",
-    "STUDY",
-    "build",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -460,41 +456,3 @@ class PathTrackingProblem(StudyProblem):
             cached = limits.limit_violations(self, self.seed_x(), "linear")
             self._seed_broken = cached
         return cached
-
-
-def build(robot: Any, params: Any) -> PathTrackingProblem:
-    """``Study.build``: the problem for ``robot`` (a serial arm of ≥ 5 joints) and ``params``
-    (robot-relative fields left None are derived here when the caller did not: no preset)."""
-    if not isinstance(params, Params):
-        params = Params.model_validate(params)
-    if isinstance(robot, Robot) and not params.concrete():
-        params = derive(robot, params).params
-    return PathTrackingProblem(robot, params)
-
-
-STUDY = Study(
-    kind="path_tracking",
-    title="Timing of a line/arc path in a plane, run by an arm of ≥ 5 joints (seed 004)",
-    seed_paper="004",
-    params=Params,
-    default_robot="articulated_5dof",
-    default_optimizer={"kind": "nsga2", "params": {"pop_size": 40}},
-    default_generations=60,
-    build=build,
-    robot_kinds=("serial",),
-    needs=(NEEDS,),
-    derive=derive,
-    preset=PRESET,
-    robot_relative=(
-        'segments', 'plane_origin', 'plane_e1', 'plane_e2', 'orientation', 'rest', 'V',
-        'V_bounds',
-    ),
-    description=(
-        "An arm runs a fixed path of lines and arcs in any plane, its tool pointing down, "
-        "along a fixed axis or free; the cruise speed of each segment and the ramp times are "
-        "optimised for cycle time and/or mechanical energy under the joint speed, "
-        "acceleration and torque limits. Default: seed 004's capsule scaled to the arm's reach, "
-        "where it is well conditioned, with a tool orientation it can hold. Preset: seed 004's "
-        "capsule on articulated_5dof."
-    ),
-)

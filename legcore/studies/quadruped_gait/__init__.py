@@ -9,6 +9,7 @@ values for its own robot; :mod:`.feasibility` says what a step violates.
 """
 
 from legcore.studies.quadruped_gait.params import Params
-from legcore.studies.quadruped_gait.problem import STUDY, QuadrupedGaitProblem
+from legcore.studies.quadruped_gait.problem import QuadrupedGaitProblem
+from legcore.studies.quadruped_gait.study import STUDY
 
 __all__ = ["STUDY", "Params", "QuadrupedGaitProblem"]

@@ -76,7 +76,6 @@ from legcore.dynamics import inverse_dynamics
 from legcore.energy import integrate
 from legcore.gaits import QUADRUPED_WALK, Gait, leg_phase, stability_margin, support_polygon
 from legcore.joint_metrics import joint_metrics
-from legcore.robots.capabilities import Needs
 from legcore.robots.catalog.animatronic_quadruped import TABLE2
 from legcore.robots.legged import LeggedRobot
 from legcore.studies.quadruped_gait.cycle import (
@@ -85,20 +84,18 @@ from legcore.studies.quadruped_gait.cycle import (
     load_share,
     stance_loads,
 )
-from legcore.studies.quadruped_gait.defaults import derive
 from legcore.studies.quadruped_gait.feasibility import step_report
 from legcore.studies.quadruped_gait.legs import GaitLeg, gait_legs
-from legcore.studies.quadruped_gait.params import ROBOT_RELATIVE, Params
-from legcore.studies.quadruped_gait.preset import PRESET
+from legcore.studies.quadruped_gait.params import Params
 from legcore.studies.quadruped_gait.tables import (
     servo_mapping,
     servo_table,
     table2,
     table2_comparison,
 )
-from legcore.studies.study import Motion, Solution, Study, StudyProblem, Violation
+from legcore.studies.study import Motion, Solution, StudyProblem, Violation
 
-__all__ = ["Params", "QuadrupedGaitProblem", "STUDY", "TABLE2_PAPER", "UNREACHABLE_F", "build"]
+__all__ = ["Params", "QuadrupedGaitProblem", "TABLE2_PAPER", "UNREACHABLE_F"]
 
 FloatArray = NDArray[np.float64]
 
@@ -487,52 +484,3 @@ def _joint_names(rb: Any) -> tuple[str, ...]:
     if isinstance(joints, list):
         return tuple(j.name or f"q{i + 1}" for i, j in enumerate(joints))
     return tuple(list(rb.model.names)[1:])
-
-
-def build(robot: Any, params: Params) -> QuadrupedGaitProblem:
-    """The study's problem for ``robot`` (a quadruped :class:`LeggedRobot`) and ``params``;
-    robot-relative fields left unset are first made concrete by :meth:`Study.task` (the
-    paper's preset on its robot, else the rules of :mod:`.defaults`, with the pre-flight)."""
-    if not isinstance(params, Params):
-        params = Params.model_validate(params)
-    if any(getattr(params, f) is None for f in ROBOT_RELATIVE):
-        params = STUDY.task(robot, params).params
-    return QuadrupedGaitProblem(robot, params)
-
-
-STUDY = Study(
-    kind="quadruped_gait",
-    title="Quadruped 4-beat walk: servo table and minimum-energy step under a stability margin",
-    seed_paper="003",
-    params=Params,
-    default_robot="animatronic_quadruped",
-    default_optimizer={
-        "kind": "hka",
-        "params": {
-            "n_samples": 50,
-            "n_best": 5,
-            "alpha": 0.9,
-            "init": "survey",
-            "survey_size": 300,
-            "survey_best": 3,
-            "penalty": 1e3,
-        },
-    },
-    default_generations=40,
-    build=build,
-    robot_kinds=("legged",),
-    derive=derive,
-    preset=PRESET,
-    robot_relative=(
-        'depth', 'q_ref', 'stroke_center', 'step_length', 'step_height',
-        'step_length_bounds', 'step_height_bounds', 'speed', 'stability_margin',
-    ),
-    needs=(Needs(legged=True, n_legs=(4,), leg_joints=(2, 3), revolute=True),),
-    description=(
-        "A quadruped (four legs of 2-3 joints, one at each corner) walks the 4-beat walk; "
-        "every foot follows a level stance stroke and a smooth swing, solved by IK per sample. "
-        "The optimiser picks step length, step height and duty factor for the least "
-        "mechanical energy per metre under a static stability margin, joint speed and torque "
-        "limits. Reports the servo table per time step."
-    ),
-)

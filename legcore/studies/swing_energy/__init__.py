@@ -6,6 +6,7 @@ parameters; ``SwingEnergyProblem`` the vectorised problem (:mod:`.problem`).
 """
 
 from legcore.studies.swing_energy.params import Params
-from legcore.studies.swing_energy.problem import STUDY, SwingEnergyProblem
+from legcore.studies.swing_energy.problem import SwingEnergyProblem
+from legcore.studies.swing_energy.study import STUDY
 
 __all__ = ["STUDY", "Params", "SwingEnergyProblem"]

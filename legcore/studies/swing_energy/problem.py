@@ -127,11 +127,10 @@ from legcore.energy import mechanical_energy
 from legcore.joint_metrics import joint_metrics
 from legcore.kinematics import fk, jacobian
 from legcore.problems.base import Problem
-from legcore.robots.capabilities import Needs
 from legcore.robots.legged import LeggedRobot
 from legcore.robots.model import Robot
-from legcore.studies.study import Box, Motion, Solution, Study, StudyProblem, Violation
-from legcore.studies.swing_energy.defaults import derive, ik_reference
+from legcore.studies.study import Box, Motion, Solution, StudyProblem, Violation
+from legcore.studies.swing_energy.defaults import ik_reference
 from legcore.studies.swing_energy.geometry import (
     chain_clearance,
     point_box_distance,
@@ -145,7 +144,6 @@ from legcore.studies.swing_energy.params import (
     Obstacle,
     Params,
 )
-from legcore.studies.swing_energy.preset import PRESET
 from legcore.studies.swing_energy.setup import boxes, configuration, swing_leg
 from legcore.trajectories import ViaPointSpline, time_grid
 
@@ -153,12 +151,10 @@ __all__ = [
     "BASELINES",
     "CRITERIA",
     "RESOLUTION",
-    "STUDY",
     "BoxSpec",
     "Obstacle",
     "Params",
     "SwingEnergyProblem",
-    "build",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -178,9 +174,9 @@ class SwingEnergyProblem(StudyProblem):
     Args:
         robot: a serial leg of 2–6 revolute joints (``calderon_leg`` by default), or a legged
             robot whose leg ``params.leg`` swings.
-        params: the study :class:`Params`; fields left to the robot (None) are derived first
-            (``STUDY.task``: the preset on seed 000's leg, then
-            :func:`~legcore.studies.swing_energy.defaults.derive`).
+        params: the study :class:`Params`, concrete: fields left to the robot (None) are
+            derived by :func:`~legcore.studies.swing_energy.study.build` (the preset on seed
+            000's leg, then :func:`~legcore.studies.swing_energy.defaults.derive`).
         criterion: what F is — ``"score"`` (F = −score, the seed's GA) or a baseline criterion
             ``"theta_total"`` (rad), ``"foot_distance"`` (m), ``"energy"`` (J),
             ``"multi_criteria"`` (dimensionless, see ``swing_energy_baselines``).
@@ -200,8 +196,9 @@ class SwingEnergyProblem(StudyProblem):
         criterion: str = "score",
         refs: dict[str, float] | None = None,
     ) -> None:
-        if _incomplete(robot, params):
-            params = STUDY.task(robot, params).params
+        if incomplete(robot, params):
+            raise ValueError("params: robot-relative fields are unset (None); build the problem "
+                             "with legcore.studies.swing_energy.study.build, which derives them")
         self.source = robot  # the robot as given (a legged robot, or the serial leg)
         self.robot_name = str(getattr(robot, "name", ""))
         #: the leg's hip (4×4, body frame) when it is a leg of a legged robot whose leg frames
@@ -734,7 +731,7 @@ def _joint_names(robot: Robot) -> tuple[str, ...]:
     return tuple(names) if len(names) == robot.nq else tuple(f"q{i + 1}" for i in range(robot.nq))
 
 
-def _incomplete(robot: Any, params: Params) -> bool:
+def incomplete(robot: Any, params: Params) -> bool:
     """True when ``params`` leaves a robot-relative field to the robot (None)."""
     box = params.box
     return (
@@ -746,47 +743,3 @@ def _incomplete(robot: Any, params: Params) -> bool:
         or (params.q_end is None and params.foot_end is None)
         or (box is not None and None in (box.length, box.width, box.height, box.margin))
     )
-
-
-def build(robot: Any, params: Any) -> SwingEnergyProblem:
-    """The study's problem for ``robot`` (a serial leg, or a legged robot with ``params.leg``)
-    and ``params`` (:class:`Params`)."""
-    if not isinstance(params, Params):
-        params = Params.model_validate(params)
-    return SwingEnergyProblem(robot, params)
-
-
-STUDY = Study(
-    kind="swing_energy",
-    title="Energy-optimal swing (transfer) phase of a leg (seed 000)",
-    seed_paper="000",
-    params=Params,
-    default_robot="calderon_leg",
-    default_optimizer={
-        "kind": "ga",
-        "params": {"pop_size": 100, "mutation_rate": 0.03, "crossover_rate": 0.9,
-                   "elitism": 2, "fitness": "negated", "penalty": 300.0},
-    },
-    default_generations=100,
-    build=build,
-    robot_kinds=("serial", "legged"),
-    derive=derive,
-    preset=PRESET,
-    robot_relative=(
-        'leg', 'q_start', 'q_end', 'exact_ends', 'step_height', 'w_d', 'w_a',
-        'search_range', 'tube', 'lift_only',
-    ),
-    needs=(
-        Needs(serial=True, min_joints=2, max_joints=6, revolute=True),
-        Needs(legged=True, leg_joints=(2, 6), revolute=True),
-    ),
-    description=(
-        "One leg (a serial chain of 2-6 revolute joints, or one leg of a legged robot: "
-        "problem.leg, by default its first front leg) swings one step forward in body axes "
-        "(from half a step behind a nominal stance to half a step ahead, scaled to the leg's "
-        "length) or from a given start to a given end foot position or configuration, through "
-        "joint via points on a control grid; the GA maximises seed 000's coordination score "
-        "(or a baseline's criterion) with the foot and links above the ground and clear of "
-        "box obstacles. Reports the mechanical energy and seed 000's per-joint table."
-    ),
-)

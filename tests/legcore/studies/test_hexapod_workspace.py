@@ -30,11 +30,10 @@ from legcore.studies.hexapod_workspace.geometry import (
 from legcore.studies.hexapod_workspace.problem import (
     HV_REF,
     PAPER_TABLE2,
-    STUDY,
     HexapodWorkspaceProblem,
     Params,
-    build,
 )
+from legcore.studies.hexapod_workspace.study import STUDY, build
 from legcore.studies.registry import get_study
 
 ROOT = Path(__file__).resolve().parents[3]

@@ -36,12 +36,11 @@ from legcore.studies.path_placement.paths import (
 from legcore.studies.path_placement.preset import PRESET
 from legcore.studies.path_placement.problem import (
     CONSTRAINT_NAMES,
-    STUDY,
     Params,
-    build,
     max_manipulability,
     simplified_workspace,
 )
+from legcore.studies.path_placement.study import STUDY, build
 from legcore.studies.registry import get_study
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"

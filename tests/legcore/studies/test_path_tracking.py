@@ -19,12 +19,8 @@ from legcore.jobspec import parse_job_spec
 from legcore.robots import catalog
 from legcore.studies.path_tracking.joints import ToolOrientation
 from legcore.studies.path_tracking.kin import arm5_down_rates
-from legcore.studies.path_tracking.problem import (
-    DEFAULT_QDD_MAX,
-    STUDY,
-    Params,
-    PathTrackingProblem,
-)
+from legcore.studies.path_tracking.problem import DEFAULT_QDD_MAX, Params, PathTrackingProblem
+from legcore.studies.path_tracking.study import STUDY
 from legcore.studies.registry import get_study
 from legcore.trajectories import capsule_path
 

@@ -21,13 +21,12 @@ from legcore.robots import catalog
 from legcore.runner import run
 from legcore.studies.quadruped_gait.cycle import foot_cycle, servo_angles_deg
 from legcore.studies.quadruped_gait.problem import (
-    STUDY,
     TABLE2_PAPER,
     UNREACHABLE_F,
     Params,
     QuadrupedGaitProblem,
-    build,
 )
+from legcore.studies.quadruped_gait.study import STUDY, build
 from legcore.studies.registry import get_study
 
 ROBOT = catalog.get("animatronic_quadruped")

@@ -31,12 +31,8 @@ from legcore.studies.swing_energy.geometry import (
     via_basis,
 )
 from legcore.studies.swing_energy.preset import DEFAULT_END_STEPS, DEFAULT_START_STEPS
-from legcore.studies.swing_energy.problem import (
-    RESOLUTION,
-    Params,
-    SwingEnergyProblem,
-    build,
-)
+from legcore.studies.swing_energy.problem import RESOLUTION, Params, SwingEnergyProblem
+from legcore.studies.swing_energy.study import build
 from legcore.trajectories import ViaPointSpline
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
@@ -50,7 +46,7 @@ SHANKAR = "shankar_kaur2011_min_distance"
 
 
 def _problem(**kw: object) -> SwingEnergyProblem:
-    return SwingEnergyProblem(ROBOT, Params(**kw))
+    return build(ROBOT, Params(**kw))
 
 
 def _on_grid(values: np.ndarray) -> bool:
@@ -134,7 +130,7 @@ def test_score_of_still_joints_and_bounds() -> None:
     F, G = pb.evaluate(pb.coordinated_x())
     assert F[0, 0] == pytest.approx(-10.0) and G[0, 1] > 0.0
     # ε = 0 is eqs 2/5 exactly with 0/0 := 1; any motion of a still joint then scores 0 there
-    p0 = SwingEnergyProblem(ROBOT, Params(obstacle=True, ratio_eps=0.0))
+    p0 = build(ROBOT, Params(obstacle=True, ratio_eps=0.0))
     assert p0.evaluate(p0.coordinated_x())[0][0, 0] == pytest.approx(-10.0)
     via = p0.coord_steps * RESOLUTION
     via[4:6, 1] += RESOLUTION  # joint 2 moves one step out and back

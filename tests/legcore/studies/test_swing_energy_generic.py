@@ -11,7 +11,8 @@ from legcore.ik import solve
 from legcore.kinematics import fk
 from legcore.robots import build_robot, catalog
 from legcore.studies.registry import get_study
-from legcore.studies.swing_energy.problem import Params, SwingEnergyProblem, build
+from legcore.studies.swing_energy.problem import Params, SwingEnergyProblem
+from legcore.studies.swing_energy.study import build
 
 LEG = catalog.get("calderon_leg")
 
