@@ -16,9 +16,9 @@ work on this robot (the cheap pre-flight check: a path out of reach, no standing
 step longer than the leg can make). A refusal is found before the job is queued.
 
 A paper's own settings are data, not a branch: a :class:`Preset` names the paper's robot (a
-catalog name) and the parameter values the paper used; on that robot — the same model, not just
-the same name — the preset fills the unset fields first, so every seed number is reproduced with
-the defaults, and ``derive`` sees them as given.
+catalog name) and the parameter values the paper used; on a robot with that robot's kinematics
+(whatever its name or masses: :meth:`Preset.applies`) the preset fills the unset fields first, so
+every seed number is reproduced with the defaults, and ``derive`` sees them as given.
 
 A run's answer states whether it is feasible: :class:`Violation` is one violated constraint of a
 solution with its size (``StudyProblem.violations``).
@@ -59,8 +59,8 @@ class Preset:
 
     ``robot``: the catalog name of the paper's robot; ``params``: the study parameters the
     paper used (JSON-able values, validated by the study's ``Params``); ``source``: the paper
-    and table. It applies to a robot whose model equals the catalog robot's (same name and same
-    spec, so an edited copy of the robot gets robot-relative defaults instead). ``cases``:
+    and table. It applies to a robot with the catalog robot's kinematics (:meth:`applies`; a
+    robot of other geometry gets robot-relative defaults instead). ``cases``:
     the paper's values that depend on what the user gave (``cases(params) -> {field: value}``,
     e.g. a second case's end posture when there is an obstacle, or a value left out when the
     user gave another field that excludes it); :meth:`values` merges them over ``params``.
@@ -78,16 +78,42 @@ class Preset:
         return {**self.params, **self.cases(params)}
 
     def applies(self, robot: Any) -> bool:
-        """True when ``robot`` is this preset's catalog robot (same name and same model)."""
-        if getattr(robot, "name", None) != self.robot:
-            return False
+        """True when ``robot`` is this preset's catalog robot as far as the task goes: the same
+        kinematics (joints, their geometry and position limits, base, tool, home), whatever its
+        name, masses, inertias, motors and speed or torque limits — so a sweep of the paper's
+        robot's masses keeps the paper's task at every point. A legged catalog robot (no
+        spec): the catalog robot itself, or one of its name built without a spec."""
         from legcore.robots import catalog
 
         try:
             paper_robot = catalog.get(self.robot)
         except KeyError:
             return False
-        return robot is paper_robot or getattr(robot, "spec", None) == paper_robot.spec
+        if robot is paper_robot:
+            return True
+        mine, paper = getattr(robot, "spec", None), paper_robot.spec
+        if paper is None or mine is None:
+            return mine is None and paper is None and getattr(robot, "name", None) == self.robot
+        return type(mine) is type(paper) and _geometry(mine) == _geometry(paper)
+
+
+#: Spec fields that do not change a task's geometry (dynamics, names): ignored by
+#: :meth:`Preset.applies`.
+_NOT_GEOMETRY = frozenset({"name", "description", "mass", "com", "inertia", "motor", "tau_max",
+                           "qd_max", "qdd_max"})
+
+
+def _geometry(spec: Any) -> Any:
+    """A robot spec's kinematic content: its JSON without :data:`_NOT_GEOMETRY` keys."""
+
+    def strip(v: Any) -> Any:
+        if isinstance(v, dict):
+            return {k: strip(x) for k, x in v.items() if k not in _NOT_GEOMETRY}
+        if isinstance(v, list):
+            return [strip(x) for x in v]
+        return v
+
+    return strip(spec.model_dump(mode="json"))
 
 
 def fill(params: Any, values: Mapping[str, Any]) -> Any:

@@ -8,9 +8,10 @@ motion passes physical checks, independent of legcore's kinematics (Pinocchio):
 
 - the foot starts and ends at the derived positions: half a step behind and ahead of the
   nominal stance, which lies under the hip's pitch joint along the body's forward axis, at the
-  foot's home lateral offset and 0.7 L from that joint (L the stretched leg below it: no sampled
-  posture reaches further); it moves forward along the body's x axis by the step length 0.5 L,
-  its lateral and vertical end−start difference 0 to 1e-6 m;
+  foot's home lateral offset (at most 45° out from under it) and 0.7 L from that joint (L the
+  stretched leg below it: no sampled posture reaches further); it moves forward along the
+  body's x axis by the step length 0.5 L, its lateral and vertical end−start difference 0 to
+  1e-6 m;
 - the knee is on the leg's own branch (behind the hip–foot line at both ends);
 - the foot stays above the ground (its start height, less the 1 mm tolerance) during the swing;
 - the mechanical energy is at least the motion's gravity/inertia bound (``check_energy``).
@@ -20,6 +21,7 @@ And a value the user gives (``leg``, ``foot_start``) is used as given, the rest 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -28,7 +30,7 @@ import pinocchio as pin
 import pytest
 
 import legcore
-from legcore.robots import LeggedRobot, Robot, catalog
+from legcore.robots import LeggedRobot, Robot, build_robot, catalog
 from legcore.runner import prepare
 from legcore.studies.fit import fit
 from legcore.studies.swing_energy.defaults import FRACTIONS, leg_length_of
@@ -98,8 +100,9 @@ def check_step(robot: Robot | LeggedRobot, leg: str | None, run: Any, *,
     home = np.clip(chain.home, chain.q_min, chain.q_max)
     hip = _hip(chain, home)
     assert (mid - hip) @ forward == pytest.approx(0.0, abs=POS_TOL)
-    assert mid @ lateral == pytest.approx(tool_positions(chain, home[None])[0] @ lateral,
-                                          abs=POS_TOL)
+    home_side = float((tool_positions(chain, home[None])[0] - hip) @ lateral)
+    side = math.copysign(min(abs(home_side), fraction * L * math.sqrt(0.5)), home_side)
+    assert mid @ lateral == pytest.approx(hip @ lateral + side, abs=POS_TOL)  # ≤ 45° out
     assert np.linalg.norm(mid - hip) / L == pytest.approx(fraction, abs=1e-9)
     assert fraction in FRACTIONS and mid[2] < hip[2]
     if knee_behind:
@@ -154,6 +157,33 @@ def test_catalog_hexapod_steps_forward_along_its_y_axis() -> None:
     assert not verdict.accepted and verdict.field == "robot"
     assert refusal_message({"robot": "animatronic_quadruped",
                             "problem": {"kind": "swing_energy"}}) == verdict.message
+
+
+def test_a_leg_mounted_sideways_steps_across_its_reach() -> None:
+    """Seed 000's leg with a longer shank (0.16 m instead of 0.15: other kinematics, so not the
+    paper's preset) reaches out along its base x at home, as a leg on the side of a hexapod
+    (its masses alone changed, it would keep the paper's task): its derived step goes
+    across that reach (+y), from a stance 45° below and out from the hip's pitch joint, and the
+    run is feasible — the foot moves 0.5 L along y, ends at its start height, stays above the
+    ground, and the energy is at least its gravity bound (Pinocchio)."""
+    spec = catalog.get("calderon_leg").spec.model_dump(mode="json")
+    heavier = {**spec, "joints": [*spec["joints"][:1], {**spec["joints"][1], "mass": 0.16},
+                                  *spec["joints"][2:]]}
+    assert fit(build_robot(heavier), "swing_energy").task.preset is not None  # the paper's task
+    spec["joints"][2]["a"] = 0.16
+    r = legcore.run({"robot": spec, "problem": {"kind": "swing_energy"}, **SHORT})
+    assert r.feasible and r.task is not None and r.task.preset is None
+    built = prepare({"robot": spec, "problem": {"kind": "swing_energy"}}).problem.robot
+    L = leg_length_of(built)
+    mo = r.best.motion
+    feet = tool_positions(built, mo.q)
+    np.testing.assert_allclose(feet[-1] - feet[0], [0.0, 0.5 * L, 0.0], atol=POS_TOL)
+    hip = _hip(built, np.clip(built.home, built.q_min, built.q_max))
+    mid = 0.5 * (feet[0] + feet[-1])
+    out, down = mid[0] - hip[0], hip[2] - mid[2]
+    assert out == pytest.approx(down, abs=POS_TOL) and out > 0.0  # 45° below and out
+    assert feet[:, 2].min() >= feet[0, 2] - r.spec.problem.ground_tolerance - 1e-9
+    check_energy(built, mo.t, mo.q, mo.qd, mo.qdd, mo.tau, r.best.metrics["energy_total"])
 
 
 def test_the_coordinated_step_dips_and_says_by_how_much(robot_spec: SpecOf) -> None:

@@ -3,10 +3,10 @@ duration, where they are drawn (the ORIGINAL placement), the simplified spherica
 eqs 1–5 as the region, the closed-form IK from the arm's home, and the nominal power of eq 15
 (0.4 kW, assumed for the PUMA 560 — the paper does not print it).
 
-On that catalog robot (the same model) these fill the fields the user left unset, before the
-robot-relative rules of :mod:`legcore.studies.path_placement.defaults`; every number of
-``examples/001_*.yaml`` and of docs/studies.md (seed 001) comes from them.
-"""
+On that catalog robot's kinematics (whatever its name, masses or motors) these fill the fields
+the user left unset, before the robot-relative rules of
+:mod:`legcore.studies.path_placement.defaults`; every number of ``examples/001_*.yaml`` and of
+docs/studies.md (seed 001) comes from them."""
 
 from __future__ import annotations
 

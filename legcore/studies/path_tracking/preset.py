@@ -2,10 +2,10 @@
 z = 0.50 m, the tool pointing down, the paper's law V = 0.10 m/s with t_a = t_d = 3 s, the speed
 box of the seed example and its evaluation on the samples only.
 
-On that catalog robot (the same model) these fill the fields the user left unset, before the
-robot-relative rules of :mod:`legcore.studies.path_tracking.defaults`; every number of
-``examples/004_*.yaml`` and of docs/studies.md (seed 004) comes from them.
-"""
+On that catalog robot's kinematics (whatever its name, masses or motors) these fill the fields
+the user left unset, before the robot-relative rules of
+:mod:`legcore.studies.path_tracking.defaults`; every number of ``examples/004_*.yaml`` and of
+docs/studies.md (seed 004) comes from them."""
 
 from __future__ import annotations
 

@@ -20,14 +20,16 @@ Leg length ``L``
 Nominal stance
     The foot under the hip's pitch joint (its forward coordinate in the home posture), at the
     lateral offset the foot has in the home posture (the leg's own sideways offset), ``0.7 L``
-    from that joint. If the stance or a step end is out of reach inside the joint limits, or
-    near a singular posture (the foot Jacobian's smallest singular value < 0.05 L m/rad), the
-    nearest fraction of 0.5–0.9 L (steps of 0.05) that works is taken. The posture is on the
-    leg's own knee branch (:func:`~.stance.branch_of`): the only branch the IK finds inside the
-    joint limits (Go1), else the bend of its home posture (ANYmal B: a front knee behind, a rear
-    knee ahead), else — a straight home posture (Solo12) — the convention of ``quadruped_gait``:
-    the knee toward the body's centre (a front leg's behind the hip–foot line, a rear leg's
-    ahead; a serial chain's behind; for a leg bending sideways, up).
+    from that joint — at most 45° out from under it: a leg that reaches out sideways at home
+    (seed 000's, a hexapod's) stands with its foot 45° below and out from that joint. If the
+    stance or a step end is out of reach inside the joint limits, or near a singular posture
+    (the foot Jacobian's smallest singular value < 0.05 L m/rad), the nearest fraction of
+    0.5–0.9 L (steps of 0.05) that works is taken. The posture is on the leg's own knee branch
+    (:func:`~.stance.branch_of`): the only branch the IK finds inside the joint limits (Go1),
+    else the bend of its home posture (ANYmal B: a front knee behind, a rear knee ahead), else —
+    a straight home posture (Solo12) — the convention of ``quadruped_gait``: the knee toward the
+    body's centre (a front leg's behind the hip–foot line, a rear leg's ahead; a serial chain's
+    behind; for a leg bending sideways, up).
 
 Step (``q_start``/``q_end``, ``exact_ends``)
     Start = stance − ½ s · forward, end = stance + ½ s · forward (same height and lateral
@@ -193,10 +195,10 @@ def nominal_step(chain: Robot, forward: FloatArray, L: float, label: str, prefer
     tried = []
     for frac in FRACTIONS:
         r = frac * L
-        if r <= abs(dy) + 1e-9:
-            continue
-        depth = math.sqrt(r * r - dy * dy)
-        stance = float(hip @ forward) * forward + y_foot * lateral + (hip[2] - depth) * _UP
+        side = math.copysign(min(abs(dy), r * math.sqrt(0.5)), dy)  # at most 45° out
+        depth = math.sqrt(r * r - side * side)
+        y_stance = float(hip @ lateral) + side
+        stance = float(hip @ forward) * forward + y_stance * lateral + (hip[2] - depth) * _UP
         tried.append(f"{frac:g}")
         got = branch_of(chain, stance, forward, L, prefer)
         if got is None or sigma_min(chain, got[1]) < SINGULAR * L:
@@ -220,17 +222,18 @@ def nominal_step(chain: Robot, forward: FloatArray, L: float, label: str, prefer
 def ik_reference(robot: object, params: Params, chain: Robot) -> FloatArray:
     """The posture the IK of a given foot position starts from: the leg's own branch
     (:func:`~.stance.reference_posture`)."""
-    forward = leg_forward(robot, params.leg)
+    L = leg_length_of(chain)
+    forward = leg_forward(robot, params.leg, L)
     prefer = knee_toward_centre(robot, params.leg)
-    return reference_posture(chain, forward, leg_length_of(chain), prefer)[0]
+    return reference_posture(chain, forward, L, prefer)[0]
 
 
 def _ends(robot: object, params: Params, chain: Robot, label: str, values: dict[str, Any],
           rules: dict[str, str]) -> tuple[FloatArray, FloatArray]:
     """Fill ``q_start``/``q_end`` (and ``exact_ends``) when not given; check the given ends.
     Returns the start and end configurations (n,) rad as the problem will use them."""
-    forward = leg_forward(robot, params.leg)
     L = leg_length_of(chain)
+    forward = leg_forward(robot, params.leg, L)
     res = float(params.resolution)
     start_given = params.q_start is not None or params.foot_start is not None
     end_given = params.q_end is not None or params.foot_end is not None
@@ -243,7 +246,8 @@ def _ends(robot: object, params: Params, chain: Robot, label: str, values: dict[
         values["q_end"] = tuple(float(v) for v in st.q_end)
         q_s, q_e = st.q_start, st.q_end
         stance = (f"nominal stance {_v(st.stance)} m (the foot under the hip's pitch joint "
-                  f"along the forward axis {fwd}, at its home lateral offset, {st.fraction:g} × L"
+                  f"along the forward axis {fwd}, at its home lateral offset (at most 45° out), "
+                  f"{st.fraction:g} × L"
                   f" = {st.fraction * L:.4g} m from the joint, L = {L:.4g} m the stretched leg), "
                   f"knee branch: {st.branch.why}")
         for end, p, q in (("start", st.start, st.q_start), ("end", st.end, st.q_end)):

@@ -1,10 +1,10 @@
 """Seed 000's settings on its own leg (``calderon_leg``): the paper's values as data.
 
 Calderón, Bedolla & Szwedowicz (2015): the transfer phase of one 3-DOF leg of an
-electro-hydraulic hexapod (Table 1). On that catalog robot (the same model) ``PRESET`` fills
-every field the user leaves out before the robot-relative rules of
-:mod:`legcore.studies.swing_energy.defaults` run, so the seed's numbers are reproduced with the
-defaults (``examples/000_swing_energy_*.yaml`` also state them):
+electro-hydraulic hexapod (Table 1). On that catalog robot's kinematics (whatever its name,
+masses or motors) ``PRESET`` fills every field the user leaves out before the robot-relative
+rules of :mod:`legcore.studies.swing_energy.defaults` run, so the seed's numbers are reproduced
+with the defaults (``examples/000_swing_energy_*.yaml`` also state them):
 
 - start/end: the derived configurations of the seed (it gives neither; see
   ``docs/studies.md (seed 000)``) — start (−185, 384, −782), end (186, 384, −780) steps of

@@ -5,7 +5,10 @@ frame, its length, its knee branch and its nominal stance.
 Frames. A leg of a legged robot has its base frame at the hip; the body's forward axis is its
 ``meta["forward"]`` (default x, :mod:`legcore.robots.legged`), expressed in the leg's base frame
 through the hip's rotation. A plain serial chain is taken as a leg whose base frame is the body
-frame (x forward, z up). Up is +z of the base frame (the study refuses a leg whose gravity is not
+frame (x forward, z up) — or, when its foot at home lies out to the side by more than half its
+length (a leg mounted on the side of a body, as seed 000's hexapod leg), stepping across that
+reach (:func:`leg_forward`). Up is +z of the base frame (the study refuses a leg whose gravity
+is not
 along −z).
 
 - :func:`front_leg` — the first front leg of a legged robot: the legs whose hips lie furthest
@@ -71,6 +74,9 @@ BEND_PROBE = 0.3
 #: The extra starts of the branch search, rad from the reference posture, per joint.
 SEED_STEP = 0.6
 _UP = np.array([0.0, 0.0, 1.0])
+#: A serial chain whose foot lies out to the side at home by more than this × its length is a
+#: leg mounted on the side of a body: it steps across that reach (:func:`leg_forward`).
+SIDEWAYS = 0.5
 
 
 def body_forward(robot: LeggedRobot) -> FloatArray:
@@ -92,9 +98,12 @@ def front_leg(robot: LeggedRobot) -> tuple[str, str]:
     return front[0], rule
 
 
-def leg_forward(robot: object, leg: str | None) -> FloatArray:
+def leg_forward(robot: object, leg: str | None, L: float | None = None) -> FloatArray:
     """The body's forward axis (3,) in the base frame of the leg that swings: the leg ``leg`` of
-    a legged robot (through its hip's rotation, made horizontal), x for a serial chain."""
+    a legged robot (through its hip's rotation, made horizontal); for a serial chain of length
+    ``L`` (m) x — unless its foot at home lies out to the side by more than
+    :data:`SIDEWAYS` × L (a leg mounted on the side of a body, as a hexapod's or seed 000's):
+    then the horizontal direction across that reach (+x, else +y, when it is one of them)."""
     if isinstance(robot, LeggedRobot) and leg is not None:
         R = np.asarray(robot.leg(leg).hip, dtype=float)[:3, :3]
         f = R.T @ body_forward(robot)
@@ -102,6 +111,14 @@ def leg_forward(robot: object, leg: str | None) -> FloatArray:
         n = float(np.linalg.norm(f))
         if n > 1e-9:
             return f / n
+    if isinstance(robot, Robot) and L is not None:
+        foot = fk(robot, np.clip(robot.home, robot.q_min, robot.q_max))[:3, 3]
+        out = foot - (foot @ _UP) * _UP
+        reach = float(np.linalg.norm(out))
+        if reach > SIDEWAYS * L:
+            f = np.cross(_UP, out / reach)
+            flip = f[0] < -1e-9 or (abs(f[0]) <= 1e-9 and f[1] < 0.0)
+            return -f if flip else f
     return np.array([1.0, 0.0, 0.0])
 
 

@@ -11,13 +11,13 @@ import pytest
 
 from legcore.kinematics import fk
 from legcore.robots import build_robot
-from legcore.studies.swing_energy import problem as swing_energy
+from legcore.studies import swing_energy
 
 
 def test_solo12_leg_swings_its_foot_not_its_knee(erd_urdf: Callable[[str], str]) -> None:
     spec = {"kind": "urdf", "name": "solo12", "urdf": erd_urdf("solo12"), "legs": "auto"}
     leg = build_robot({**spec, "leg": "FL"})
-    problem = swing_energy.build(leg, swing_energy.Params())
+    problem = swing_energy.STUDY.build(leg, swing_energy.Params())
     sol = problem.solution(problem.coordinated_x())
     assert sol.motion is not None and sol.motion.tool is not None
     foot = fk(leg, sol.motion.q)[:, :3, 3]  # the FL_FOOT frame (see test_urdf_robots)

@@ -458,9 +458,11 @@ def test_workspace_analysis_of_the_seed_arm(arm):
 
 
 def test_defaults_on_an_arm_that_is_not_the_seeds(arm):
-    """The same 5-DOF arm under another name (no preset): seed 004's capsule scaled to 0.4 ×
-    the reach, in a plane through a well-conditioned posture, the tool down; V = 0.10 m/s ×
-    the path's length / the seed's, V_bounds (V/10, 10 V); the build follows it exactly."""
+    """The 5-DOF arm on a 1 cm higher base column (other kinematics: no preset — the same arm under
+    another name, or with other masses, keeps the paper's task): seed 004's capsule scaled
+    to 0.4 × the reach, in a plane through a well-conditioned posture, the tool down; V =
+    0.10 m/s × the path's length / the seed's, V_bounds (V/10, 10 V); the build follows it
+    exactly."""
     from legcore.robots import build_robot
     from legcore.studies.path_tracking.defaults import SEED_PATH_LENGTH, capsule
 
@@ -470,7 +472,11 @@ def test_defaults_on_an_arm_that_is_not_the_seeds(arm):
         for key in ("center", "start", "end"):
             if key in got:
                 np.testing.assert_allclose(np.add(got[key], (0.0, 0.3)), ref[key], atol=1e-15)
-    other = build_robot(arm.spec.model_copy(update={"name": "my_arm"}))
+    renamed = build_robot(arm.spec.model_copy(update={"name": "my_arm"}))
+    assert STUDY.task(renamed, Params()).preset is not None  # the same kinematics
+    joints = [arm.spec.joints[0].model_copy(update={"d": arm.spec.joints[0].d + 0.01}),
+              *arm.spec.joints[1:]]
+    other = build_robot(arm.spec.model_copy(update={"name": "my_arm", "joints": joints}))
     task = STUDY.task(other, Params())
     p = task.params
     assert task.preset is None and p.orientation == "down"
