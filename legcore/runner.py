@@ -15,6 +15,7 @@ import numpy as np
 
 from legcore.earned import earned_summary
 from legcore.jobspec import JobSpec, parse_job_spec
+from legcore.optimality_gap import optimality_gap
 from legcore.optimizers import Progress, Result, Run, get_algorithm, termination_from_budget
 from legcore.optimizers.base import Algorithm
 from legcore.optimizers.termination import Termination
@@ -151,6 +152,7 @@ class RunResult:
     objective_names: tuple[str, ...]
     start: dict[str, Any] | None = None
     task: Task | None = None
+    gap: dict[str, Any] | None = None
 
     @property
     def feasible(self) -> bool:
@@ -160,7 +162,8 @@ class RunResult:
     def to_dict(self) -> dict[str, Any]:
         """``result.json``: spec, status, feasible and the optimum's violations, the task (the
         robot-relative parameters and their rules), best, pareto, baselines, history, extras,
-        optimizer, start (what the optimiser earned: `legcore.earned`)."""
+        optimizer, start (what the optimiser earned: `legcore.earned`), gap (to the best the
+        problem allows: `legcore.optimality_gap`)."""
         return _jsonable(
             {
                 "spec": self.spec.model_dump(mode="json"),
@@ -176,6 +179,7 @@ class RunResult:
                 "extras": self.extras,
                 "optimizer": self.optimizer,
                 "start": self.start,
+                "gap": self.gap,
             }
         )
 
@@ -215,6 +219,8 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         objective_names=problem.objective_names,
         start=start_summary(problem, result),
         task=problem.task,
+        gap=optimality_gap(tuple(problem.objective_names), best.objectives,
+                           problem.reference_optimum()),
     )
 
 

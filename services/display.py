@@ -39,6 +39,7 @@ from legcore.studies.metric_names import (
 )
 from services.display_verdict import (
     change_withheld,
+    gap_line,
     task_line,
     task_lines,
     verdict_cell,
@@ -81,6 +82,10 @@ def label(m: MetricName) -> str:
 
 
 # ------------------------------------------------------------------ one result
+def _dict_or_none(v: Any) -> dict[str, Any] | None:
+    return v if isinstance(v, dict) else None
+
+
 @dataclass
 class ResultView:
     """A finished job as the CLI shows it (all values in the studies' units): the optimum's
@@ -100,6 +105,7 @@ class ResultView:
     verdict: Verdict = field(default_factory=Verdict)
     baseline_verdicts: dict[str, Verdict] = field(default_factory=dict)
     task: dict[str, Any] | None = None
+    gap: dict[str, Any] | None = None
 
     @classmethod
     def from_api(cls, kind: str, res: dict[str, Any], front_size: int | None = None) -> ResultView:
@@ -129,7 +135,8 @@ class ResultView:
                    list(summary.get("table") or []), dict(summary.get("optimizer") or {}),
                    front_size, summary.get("start"),
                    Verdict.of(None, res.get("feasible"), res.get("violations")), verdicts,
-                   task if isinstance(task, dict) else None)  # fmt: skip
+                   task if isinstance(task, dict) else None,
+                   _dict_or_none(res.get("gap") or summary.get("gap")))  # fmt: skip
 
     @classmethod
     def from_run(cls, doc: dict[str, Any]) -> ResultView:
@@ -150,6 +157,7 @@ class ResultView:
             Verdict.of(None, doc.get("feasible"), doc.get("violations")),
             {k: Verdict.of(v) for k, v in baselines.items()},
             task if isinstance(task, dict) else None,
+            _dict_or_none(doc.get("gap")),
         )
 
     # -------------------------------------------------------------- rows
@@ -268,7 +276,7 @@ def summary_block(
     if start not in view.baselines:
         start = None
     lines: list[RenderableType] = [Text.from_markup(title)]
-    for extra_line in (verdict_line(view.verdict), task_line(view.task)):
+    for extra_line in (verdict_line(view.verdict), gap_line(view.gap), task_line(view.task)):
         if extra_line is not None:
             lines.append(extra_line)
     no_change = change_withheld(view.verdict, start, view.baseline_verdicts)

@@ -9,10 +9,11 @@ from typing import Any
 
 from rich.text import Text
 
-from legcore.studies.metric_names import baseline_name
+from legcore.studies.metric_names import baseline_name, metric_name
 from services.verdict import Verdict, violations_text
 
-__all__ = ["change_withheld", "task_line", "task_lines", "verdict_cell", "verdict_line"]
+__all__ = ["change_withheld", "gap_line", "task_line", "task_lines", "verdict_cell",
+           "verdict_line"]
 
 
 def verdict_line(verdict: Verdict) -> Text | None:
@@ -25,6 +26,28 @@ def verdict_line(verdict: Verdict) -> Text | None:
         return Text("  feasible: the optimum meets every constraint", style="green")
     what = violations_text(verdict.violations) or "the optimum violates a constraint"
     return Text(f"  INFEASIBLE: {what}", style="bold red")
+
+
+def gap_line(gap: Mapping[str, Any] | None) -> Text | None:
+    """``gap to the physical minimum (TOPP-RA …): +0.93 % (3.391 s vs 3.360 s)`` for a
+    single-objective optimum with a reference, ``no optimality gap: <why>`` (dim) without one,
+    None for a result stored without it or a multi-objective one."""
+    if not gap:
+        return None
+    ref, pct = gap.get("reference"), gap.get("pct")
+    if ref is None:
+        if gap.get("objective") is None:  # several objectives: the front speaks for itself
+            return None
+        return Text(f"  no optimality gap: {gap.get('reason') or 'no reference'}", style="dim")
+    m = metric_name(str(gap.get("objective")), None)
+    unit = f" {m.unit}" if m.unit else ""
+    how = f"{gap.get('kind') or 'reference'}"
+    words = f"{pct:+.3g} %" if isinstance(pct, int | float) else "—"
+    value = gap.get("value")
+    shown = (f" ({float(value):.6g}{unit} vs {float(ref):.6g}{unit}"
+             f"{', ' + str(gap['method']) if gap.get('method') else ''})"
+             if isinstance(value, int | float) else "")
+    return Text(f"  gap to the {how}: {words}{shown}", style="magenta")
 
 
 def _rules(task: Mapping[str, Any] | None) -> dict[str, str]:

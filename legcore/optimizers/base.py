@@ -372,6 +372,22 @@ class Algorithm(ABC):
         if better:
             self._inc = (X[i].copy(), F[i].copy(), float(cv[i]))
 
+    def _initial_population(self, n: int) -> np.ndarray:
+        """The first population: ``n`` random points (:meth:`_random_population`), the first
+        of them replaced by the problem's ``initial_points`` (inside the box, on its grid)."""
+        X = self._random_population(n)
+        p = self.problem
+        start = self._initial_points()
+        if start is not None and n > 0:
+            S = np.atleast_2d(np.asarray(start, dtype=float))[:n]
+            X[: S.shape[0]] = p.snap(np.clip(S, p.xl, p.xu))
+        return X
+
+    def _initial_points(self) -> np.ndarray | None:
+        """The problem's ``initial_points()`` (a duck-typed problem may have none)."""
+        get = getattr(self.problem, "initial_points", None)
+        return None if get is None else get()
+
     def _random_population(self, n: int) -> np.ndarray:
         """``n`` uniform random points in the box (on the grid for an integer-coded problem)."""
         p = self.problem

@@ -196,6 +196,8 @@ class GA(Algorithm):
     def _ask(self) -> np.ndarray:
         n = self._params["pop_size"]
         if self._genes.shape[0] == 0:
+            if self._initial_points() is not None:
+                return self._initial_population(n)
             return self._decode(self._fresh_genes((n, self.problem.n_var)))
         n_child = n - self._params["elitism"]
         n_pairs = (n_child + 1) // 2

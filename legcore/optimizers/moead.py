@@ -180,7 +180,7 @@ class MOEAD(Algorithm):
         p = self.problem
         n = self.pop_size
         if self._X.shape[0] == 0:
-            return self._random_population(n)
+            return self._initial_population(n)
         rng = self._rng
         t = self._params["n_neighbors"]
         local = rng.random(n) < self._params["prob_neighbor_mating"]

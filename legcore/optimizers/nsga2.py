@@ -127,7 +127,7 @@ class NSGA2(Algorithm):
     def _ask(self) -> np.ndarray:
         n = self._params["pop_size"]
         if self._X.shape[0] == 0:
-            return self._random_population(n)
+            return self._initial_population(n)
         # offspring identical (bitwise) to a parent or to another offspring are discarded and
         # re-drawn (up to _MAX_ROUNDS rounds; then duplicates fill the batch) as pymoo does
         parents = np.ascontiguousarray(self._X).view(np.int64)

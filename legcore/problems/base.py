@@ -246,6 +246,12 @@ class Problem(ABC):
         """Named reference decision vectors to compare an optimum against (default: none)."""
         return {}
 
+    def initial_points(self) -> np.ndarray | None:
+        """Decision vectors ``(k, n_var)`` the first population starts with (the rest is
+        random), as pymoo's ``sampling=`` array — e.g. a solution an exact method gives for a
+        relaxation of the problem; None (the default): a random start only."""
+        return None
+
     def __repr__(self) -> str:
         kind = "integer" if self.is_integer else "continuous"
         return (f"{self.name}(n_var={self.n_var}, n_obj={self.n_obj}, "

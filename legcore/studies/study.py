@@ -178,6 +178,12 @@ class StudyProblem(Problem):
         beside the optimum so that nobody credits the optimiser with what the coding gave."""
         return None
 
+    def reference_optimum(self) -> dict[str, Any] | None:
+        """For a single objective, the best value any answer can reach, from an exact
+        solution of the same problem: ``{"objective", "value", "kind", "method"[, "sense"]}``
+        (:func:`legcore.optimality_gap.optimality_gap`), or None (the default: none known)."""
+        return None
+
     def violations(self, x: FloatArray) -> tuple[Violation, ...]:
         """The constraints ``x`` violates (``G > 0``), each with its size: the columns of G
         named by ``constraint_names`` (``g1``, ``g2``, … when unnamed), in G's units. A study

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from datetime import datetime
 from typing import Any
 
@@ -14,6 +15,7 @@ from services.api.verdict_schemas import (
     violations_out,
 )
 from services.store.dashboard_queries import JobRow
+from services.store.records import BaselineRecord
 from services.store.tables import JobStatus
 
 
@@ -143,6 +145,27 @@ class BaselineMark(BaseModel):
     name: str
     objectives: list[float | None] = Field(description="In the order of `objectives`.")
     metrics: dict[str, Any]
+
+    @classmethod
+    def from_record(cls, b: BaselineRecord, names: list[str]) -> BaselineMark:
+        """A stored baseline (its decoded summary) with its objectives in the order of
+        ``names`` (None where it has none, or not a finite number) and its scalar metrics."""
+        doc: dict[str, Any] = b.metrics if isinstance(b.metrics, dict) else {}
+        raw_obj, raw_met = doc.get("objectives"), doc.get("metrics")
+        objectives: dict[str, Any] = raw_obj if isinstance(raw_obj, dict) else {}
+        metrics: dict[str, Any] = raw_met if isinstance(raw_met, dict) else doc
+        return cls(
+            name=b.name,
+            objectives=[finite_or_none(objectives.get(n)) for n in names],
+            metrics={k: v for k, v in metrics.items() if isinstance(v, int | float | str | bool)},
+        )
+
+
+def finite_or_none(v: Any) -> float | None:
+    """``v`` as a float when it is a finite number (not a bool), else None."""
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        return None
+    return float(v) if math.isfinite(v) else None
 
 
 class PaperMark(BaseModel):

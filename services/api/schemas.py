@@ -20,6 +20,7 @@ from services.api.validation import RobotSummary
 from services.api.verdict_schemas import (
     FEASIBLE_DESCRIPTION,
     VIOLATIONS_DESCRIPTION,
+    GapOut,
     TaskOut,
     ViolationOut,
     feasible_of,
@@ -369,6 +370,11 @@ class ResultOut(BaseModel):
         description="The study parameters the job ran with on its robot and the rule behind "
         "each derived value (null for jobs stored before tasks were recorded).",
     )
+    gap: GapOut | None = Field(
+        default=None,
+        description="How far the optimum is from the best the problem allows (single "
+        "objective; null for jobs stored before gaps were recorded).",
+    )
     objective_names: list[str]
     objectives: Any = Field(
         description="Objectives of the best solution as stored by the worker: "
@@ -396,6 +402,7 @@ class ResultOut(BaseModel):
             feasible=None if job is None else job.feasible,
             violations=[] if job is None else violations_out(job.violations),
             task=TaskOut.from_doc(summary.get("task")),
+            gap=GapOut.from_doc(summary.get("gap")),
             objective_names=objective_names(result),
             objectives=result.objectives,
             best_x=result.best_x,

@@ -10,6 +10,7 @@ from pydantic import BaseModel, Field
 
 __all__ = [
     "FEASIBLE_DESCRIPTION",
+    "GapOut",
     "VIOLATIONS_DESCRIPTION",
     "TaskOut",
     "ViolationOut",
@@ -88,3 +89,35 @@ FEASIBLE_DESCRIPTION = (
     "the run completed."
 )
 VIOLATIONS_DESCRIPTION = "What the reported optimum violates (empty unless `feasible` is false)."
+
+
+class GapOut(BaseModel):
+    """How far a single-objective optimum is from the best its problem allows (an exact
+    solution of the same problem, e.g. ``path_tracking``'s physical minimum by TOPP-RA), or
+    why there is no such reference (``legcore.optimality_gap``)."""
+
+    objective: str | None = Field(default=None, description="The objective compared.")
+    value: float | None = Field(default=None, description="The optimum's value, its units.")
+    reference: float | None = Field(
+        default=None, description="The best value the problem allows (null: none known)."
+    )
+    kind: str | None = Field(default=None, description="What the reference is, in words.")
+    method: str | None = Field(default=None, description="How the reference was computed.")
+    pct: float | None = Field(
+        default=None,
+        description="100 (value - reference) / |reference| for a minimised objective: how "
+        "much worse the optimum is (>= 0).",
+    )
+    reason: str | None = Field(default=None, description="Why there is no reference.")
+
+    @classmethod
+    def from_doc(cls, doc: Any) -> GapOut | None:
+        """From the ``gap`` a worker stores in the result summary (None when absent)."""
+        if not isinstance(doc, dict):
+            return None
+        num = lambda k: (float(doc[k]) if isinstance(doc.get(k), int | float)  # noqa: E731
+                         and not isinstance(doc.get(k), bool) else None)
+        text = lambda k: str(doc[k]) if isinstance(doc.get(k), str) else None  # noqa: E731
+        return cls(objective=text("objective"), value=num("value"), reference=num("reference"),
+                   kind=text("kind"), method=text("method"), pct=num("pct"),
+                   reason=text("reason"))

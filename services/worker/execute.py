@@ -385,6 +385,8 @@ def _store_attempt(
                     # the robot-relative parameters the job ran with and the rule behind each
                     # derived value (what the job page and `legopt results` show)
                     "task": doc.get("task"),
+                    # how far the optimum is from the best the problem allows (issue 19)
+                    "gap": doc.get("gap"),
                 },
                 # the verdict, on the job row (GET /jobs, the jobs page, exports)
                 feasible=doc.get("feasible"),

@@ -92,12 +92,15 @@ def _motion(sol: Solution) -> Any:
     return mo
 
 
-def check_tracking(problem: Any, sol: Solution) -> None:
+def check_tracking(problem: Any, sol: Solution, law: Any = None) -> None:
     """``path_tracking``: the tool on the path at σ(t) and its orientation kept (1e-6), every
-    limit held, q̇ the derivative of q, energy ≥ the bound."""
+    limit held, q̇ the derivative of q, energy ≥ the bound (``law``: the time law of a
+    solution without a decision vector, e.g. the physical minimum)."""
     robot, mo = problem.robot, _motion(sol)
     assert sol.metrics["feasible"] == 1.0
-    sigma = problem.time_law(np.asarray(sol.x)[None, :]).evaluate(mo.t[None, :])[0, 0]
+    if law is None:
+        law = problem.time_law(np.asarray(sol.x)[None, :])
+    sigma = law.evaluate(mo.t[None, :])[0, 0]
     path = problem.path.derivatives(sigma)[0]
     assert np.abs(tool_positions(robot, mo.q) - path).max() < POS_TOL  # on the path
     assert problem.tool.errors(fk(robot, mo.q), path)[1].max() < POS_TOL  # orientation kept

@@ -89,6 +89,12 @@ def test_default_arm_task_is_refused_or_feasible(name: str, kind: str, robot_spe
         assert all(row["time_change_pct"] is not None for row in res.extras["front"])
         if "seed_max_V" in res.baselines:
             assert res.baselines["seed_max_V"].feasible
+        # issue 19: the physical minimum (TOPP-RA) of every arm's path, feasible, below ours
+        physical = problem.time_optimal
+        assert physical is not None and res.baselines["time_optimal"].feasible
+        check_tracking(problem, res.baselines["time_optimal"], physical.law)
+        assert physical.T <= res.best.objectives["time"]
+        assert res.gap is not None and res.gap["pct"] >= 0.0
     else:
         assert isinstance(problem, PathPlacementProblem)
         check_placement(problem, res.best)

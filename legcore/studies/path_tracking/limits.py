@@ -56,36 +56,38 @@ def edge_times(problem: PathTrackingProblem, law: TimeLaw) -> FloatArray:
     return np.clip(np.concatenate(parts, axis=1), 0.0, law.T[:, None])
 
 
-def dense_limits(problem: PathTrackingProblem, X: FloatArray, G: FloatArray, factor: int,
-                 shape: RampShape | None = None, every: bool = False) -> FloatArray:
-    """``G`` (B, n_constr) with the joint-limit columns also counting the peaks at
-    :func:`edge_times`
-    (every candidate) and, for the candidates near a limit (every candidate with
-    ``every``), over ``factor`` × ``n_samples`` samples and the edges."""
-    X = np.atleast_2d(X)
+def dense_limits(problem: PathTrackingProblem, X: FloatArray | TimeLaw, G: FloatArray,
+                 factor: int, shape: RampShape | None = None, every: bool = False
+                 ) -> FloatArray:
+    """``G`` (B, n_constr) of decision vectors ``X`` (or of time laws) with the joint-limit
+    columns also counting the peaks at :func:`edge_times` (every candidate) and, for the
+    candidates near a limit (every candidate with ``every``), over ``factor`` × ``n_samples``
+    samples and the edges."""
+    law = X if isinstance(X, TimeLaw) else problem.time_law(np.atleast_2d(X), shape)
     nl = 3 * problem.robot.nq
     G = G.copy()
-    edges = problem.simulate(X, shape, full=False, samples=0)["G"]
+    edges = problem.simulate(law, full=False, samples=0)["G"]
     G[:, :nl] = np.maximum(G[:, :nl], edges[:, :nl])
     peak = G[:, :nl].max(axis=1)
     near = np.ones(G.shape[0], dtype=bool) if every else np.abs(peak) <= _near(
         problem.n_samples)
     if not near.any():
         return G
-    dense = problem.simulate(X[near], shape, full=False, samples=factor * problem.n_samples,
-                             extra_times=True)["G"]
+    dense = problem.simulate(law.subset(near), full=False,
+                             samples=factor * problem.n_samples, extra_times=True)["G"]
     G[near, :nl] = np.maximum(G[near, :nl], dense[:, :nl])
     return G
 
 
-def limit_violations(problem: PathTrackingProblem, x: FloatArray,
+def limit_violations(problem: PathTrackingProblem, x: FloatArray | TimeLaw,
                      shape: RampShape | None = None) -> tuple[Violation, ...]:
-    """What the motion of ``x`` (with the ramp ``shape``; None: ``params.ramp``) breaks, on
-    its samples, at least 10 × ``n_samples`` samples and the :func:`edge_times`, each with its
-    size in the limit's units (module docstring)."""
-    x = np.asarray(x, dtype=float).reshape(1, -1)
-    factor = max(problem.params.limit_check, DENSE_CHECK)
-    G = dense_limits(problem, x, problem.simulate(x, shape, full=False)["G"], factor, shape,
+    """What the motion of ``x`` (with the ramp ``shape``; None: ``params.ramp``) or of one
+    time law breaks, on its samples, at least 10 × ``n_samples`` samples and the
+    :func:`edge_times`, each with its size in the limit's units (module docstring)."""
+    law = x if isinstance(x, TimeLaw) else problem.time_law(
+        np.asarray(x, dtype=float).reshape(1, -1), shape)
+    factor = max(problem.limit_check, DENSE_CHECK)
+    G = dense_limits(problem, law, problem.simulate(law, full=False)["G"], factor,
                      every=True)[0]
     r, n = problem.robot, problem.robot.nq
     K = factor * problem.n_samples

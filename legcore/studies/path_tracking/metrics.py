@@ -22,6 +22,8 @@ METRICS: dict[str, MetricName] = {
     "t_d": M("stop ramp time t_d", "s", "", "t_d"),
     "t_b": M("blend time t_b", "s"),
     "ramp_shrink": M("ramp scale (1: as asked)", ""),
+    "v_peak": M("peak tool speed of the profile", "m/s"),
+    "limit_scale": M("limits × (to hold between gridpoints)", ""),
 }
 
 #: Key patterns (regex, label template with the groups, unit).
@@ -32,6 +34,7 @@ PATTERNS: tuple[tuple[re.Pattern[str], str, str], ...] = (
 
 #: Baseline name -> readable label.
 BASELINES: dict[str, str] = {
+    "time_optimal": "physical minimum (TOPP-RA)",
     "seed": "paper's time law",
     "seed_max_V": "paper's law at its top speed",
 }

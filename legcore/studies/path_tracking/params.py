@@ -137,9 +137,15 @@ class Params(StudyParams):
       is followed — and a redundant arm is pulled toward; None: with a derived path, the
       well-conditioned posture the path is centred on; with a given path, the robot's home.
     - ``objective``: ``"time"`` (T), ``"energy"`` (E) or ``"energy_time"`` (both).
-    - ``speeds``: ``"per_segment"`` (one cruise speed per segment + t_a, t_d, t_b) or
-      ``"single"`` (one speed, t_a, t_d — the seed's scheme).
-    - ``ramp``: speed-ramp shape, ``"linear"`` (the seed's trapezoid) or ``"cubic"``.
+    - ``speeds``: ``"per_segment"`` (one cruise speed per segment + t_a, t_d, t_b),
+      ``"single"`` (one speed, t_a, t_d — the seed's scheme) or ``"profile"`` (the tool's speed
+      at ``profile_intervals`` + 1 knots along the path, constant acceleration between them:
+      it can follow the time-optimal profile, TOPP-RA's, which the two others cannot; the
+      population starts from it).
+    - ``profile_intervals``: with ``"profile"``, about this many equal intervals over the
+      path (at least 2 per segment): as many decision variables, less one.
+    - ``ramp``: speed-ramp shape, ``"linear"`` (the seed's trapezoid) or ``"cubic"`` (not used
+      by ``"profile"``).
     - ``V``, ``t_a``, ``t_d``: the seed's law (m/s, s, s) used as the ``seed`` baseline; V
       None: 0.10 m/s scaled with the path, at most half the fastest speed the arm's joint
       speed limits allow everywhere on it (t_a = t_d = 3 s: a path scaled with its speeds
@@ -172,7 +178,8 @@ class Params(StudyParams):
     tool_yaw: Finite | None = None
     rest: tuple[Finite, ...] | None = Field(default=None, min_length=1, max_length=12)
     objective: Literal["time", "energy", "energy_time"] = "time"
-    speeds: Literal["per_segment", "single"] = "per_segment"
+    speeds: Literal["per_segment", "single", "profile"] = "per_segment"
+    profile_intervals: int = Field(default=96, ge=4, le=1000)
     ramp: Literal["linear", "cubic"] = "linear"
     V: Finite | None = Field(default=None, gt=0.0)
     t_a: Finite = Field(default=SEED_T_A, gt=0.0)

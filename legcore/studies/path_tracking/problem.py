@@ -25,18 +25,26 @@ joint torques ``max|τ_i| / τ_max,i − 1``, ramps fitting inside their segment
 ``max_k fit_k − 1``, and with ``T_max`` the cycle time ``T / T_max − 1``.
 
 The limits hold between the samples too (``limit_check`` > 1, every task but seed 004's
-preset): every candidate is also checked just before each speed-ramp boundary and on both
-sides of each segment join (:meth:`PathTrackingProblem.edge_times`: q̈ jumps there, and the
-regular samples only approach the one-sided limits), a candidate within a few % of a limit
-again on ``limit_check`` × K samples (the larger peaks count), and
+preset; with a speed profile always): every candidate is also checked just before each
+speed-ramp boundary and on both sides of each segment join
+(:meth:`PathTrackingProblem.edge_times`: q̈ jumps there, and the regular samples only approach
+the one-sided limits), a candidate within a few % of a limit again on ``limit_check`` × K
+samples (the larger peaks count), and
 :meth:`PathTrackingProblem.violations` reports every limit the decoded motion breaks on that
 dense resampling (which joint, by how much, in its units).
 
-Baselines: ``seed`` — the paper's own law (V = 10 cm/s on every segment, t_a = t_d = 3 s:
-segment times 4.6416 / 4 / 3.1416 / 5.5 s, profiles accel · constant · constant · decel; on
-another arm the same law with the derived reference speed V), and ``seed_max_V`` — the same
-scheme at the largest single V that satisfies every constraint. The front's % changes are
-computed against the seed law only when it is feasible (else None, with the reason).
+With ``speeds="profile"`` the decision variables are instead the tool's speed at knots along
+the path (:mod:`legcore.studies.path_tracking.encodings`), an encoding that can represent the
+time-optimal profile; the population then starts from TOPP-RA's profile on those knots.
+
+Baselines: ``time_optimal`` — the physical minimum: TOPP-RA's time-optimal profile of the same
+joint path under the same limits, on a fine grid, tightened until it holds them on a dense
+resampling (:mod:`legcore.studies.path_tracking.optimal`), for every task; ``seed`` — the
+paper's own law (V = 10 cm/s on every segment, t_a = t_d = 3 s: segment times 4.6416 / 4 /
+3.1416 / 5.5 s, profiles accel · constant · constant · decel; on another arm the same law
+with the derived reference speed V), and ``seed_max_V`` — the same scheme at the largest
+single V that satisfies every constraint. The front's % changes are computed against the seed
+law only when it is feasible (else None, with the reason).
 
 Defaults relative to the arm (the path scaled to its reach, placed where it is well
 conditioned, a tool orientation it holds): :mod:`legcore.studies.path_tracking.defaults`;
@@ -45,7 +53,6 @@ seed 004's own settings: :mod:`legcore.studies.path_tracking.preset`.
 
 from __future__ import annotations
 
-import math
 from functools import cached_property
 from typing import Any
 
@@ -59,7 +66,8 @@ from legcore.joint_metrics import joint_metrics
 from legcore.problems.base import constraint_violation
 from legcore.robots.capabilities import Needs
 from legcore.robots.model import Robot
-from legcore.studies.path_tracking import limits
+from legcore.studies.path_tracking import baselines, limits, optimal
+from legcore.studies.path_tracking.encodings import SegmentSpeeds, SpeedProfile, profile_knots
 from legcore.studies.path_tracking.joints import (
     JointPath,
     check_slowest_speed,
@@ -75,12 +83,7 @@ from legcore.studies.path_tracking.params import (
     LineSegment,
     Params,
 )
-from legcore.studies.path_tracking.timelaw import (
-    RampShape,
-    TimeLaw,
-    build_time_law,
-    segment_profiles,
-)
+from legcore.studies.path_tracking.timelaw import RampShape, TimeLaw, segment_profiles
 from legcore.studies.study import Motion, Solution, StudyProblem
 from legcore.studies.task import Violation
 from legcore.trajectories.sampling import compose_time_law
@@ -130,10 +133,11 @@ class PathTrackingProblem(StudyProblem):
     """Timing of a fixed path run by an arm (see the module docstring).
 
     Decision vector: ``speeds="per_segment"``: (V_1 … V_n, t_a, t_d[, t_b]) — t_b only when
-    n > 1; ``speeds="single"``: (V, t_a, t_d). m/s and s. ``variable_names`` lists them;
-    ``constraint_names`` the columns of G. ``joints``: the arm's joints along the path
-    (:class:`~legcore.studies.path_tracking.joints.JointPath`); ``qdd_max`` (n,) rad/s²;
-    ``V_max``: the upper bounds of the speeds in the decision box (``speed_caps``).
+    n > 1; ``speeds="single"``: (V, t_a, t_d); ``speeds="profile"``: (v_1 … v_{M−1}), the
+    speeds at the interior ``knots``. m/s and s. ``encoding`` turns them into time laws;
+    ``variable_names`` lists them; ``constraint_names`` the columns of G. ``joints``: the
+    arm's joints along the path (:class:`~legcore.studies.path_tracking.joints.JointPath`);
+    ``qdd_max`` (n,) rad/s²; ``V_max``: the upper bounds of the speeds in the decision box.
     """
 
     def __init__(self, robot: Robot, params: Params) -> None:
@@ -161,19 +165,30 @@ class PathTrackingProblem(StudyProblem):
         self.rest = rest
         self.n_seg = len(params.segments)
         self.n_samples = params.n_samples
-        n = self.n_seg
-        if params.speeds == "single":
-            names = ["V", "t_a", "t_d"]
-        else:
-            names = [f"V_{k + 1}" for k in range(n)] + ["t_a", "t_d"] + (["t_b"] if n > 1 else [])
-        self.variable_names: tuple[str, ...] = tuple(names)
         self.joints: JointPath = joint_path(robot, self.path, self.tool, rest)
         check_slowest_speed(self.joints, self.path, robot, params.V_bounds[0])
-        caps = speed_caps(self.joints, robot.qd_max, params.V_bounds)
-        self.V_max = np.array([caps.min()]) if params.speeds == "single" else caps
-        n_v = self.V_max.size
-        xl = [params.V_bounds[0]] * n_v + [params.ramp_bounds[0]] * (len(names) - n_v)
-        xu = self.V_max.tolist() + [params.ramp_bounds[1]] * (len(names) - n_v)
+        self._trapezoid = SegmentSpeeds(self.path.lengths, params.speeds == "single",
+                                        params.ramp)
+        self.encoding: SegmentSpeeds | SpeedProfile
+        if params.speeds == "profile":
+            self.encoding = SpeedProfile(self.path.lengths,
+                                         profile_knots(self.path.lengths,
+                                                       params.profile_intervals))
+            caps = optimal.knot_speed_caps(self, self.encoding.knots)
+            xl, xu = self.encoding.bounds(params.V_bounds[0], caps)
+        else:
+            self.encoding = self._trapezoid
+            xl, xu = self._trapezoid.bounds(
+                params.V_bounds[0], speed_caps(self.joints, robot.qd_max, params.V_bounds),
+                params.ramp_bounds)
+        names = self.encoding.variable_names
+        #: the limits are checked between samples (``params.limit_check``; a speed profile
+        #: always: its acceleration jumps at every knot, and it has no paper's numbers to keep)
+        self.limit_check = (params.limit_check if params.speeds != "profile"
+                            else max(params.limit_check, limits.DENSE_CHECK))
+        self.variable_names: tuple[str, ...] = names
+        self.V_max = np.array(xu[: len(xu) if params.speeds == "profile" else
+                                 (1 if params.speeds == "single" else self.n_seg)])
         joints = [f"q{i + 1}" for i in range(robot.nq)]
         cons = [f"{lim}.{j}" for lim in ("qd_max", "qdd_max", "tau_max") for j in joints]
         cons.append("ramps_fit")
@@ -199,38 +214,44 @@ class PathTrackingProblem(StudyProblem):
 
     # ------------------------------------------------------------------ decoding of X
     def split(self, X: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """(B, n_var) → segment speeds V (B, n) m/s, t_a, t_d, t_b (B,) s."""
-        X = np.atleast_2d(np.asarray(X, dtype=float))
-        n = self.n_seg
-        if self.params.speeds == "single":
-            V = np.repeat(X[:, :1], n, axis=1)
-            return V, X[:, 1], X[:, 2], np.zeros(X.shape[0])
-        t_b = X[:, n + 2] if n > 1 else np.zeros(X.shape[0])
-        return X[:, :n], X[:, n], X[:, n + 1], t_b
+        """(B, n_var) → segment speeds V (B, n) m/s, t_a, t_d, t_b (B,) s (the trapezoid
+        encodings only)."""
+        if not isinstance(self.encoding, SegmentSpeeds):
+            raise ValueError("speeds: a speed profile has no segment speeds")
+        return self.encoding.split(X)
+
+    def seed_law(self, V: FloatArray | float | None = None) -> TimeLaw:
+        """The seed's law (linear ramps; t_b irrelevant at equal speeds) at one speed ``V``
+        on every segment (default ``params.V``; an array: one law per value)."""
+        p = self.params
+        assert p.V is not None
+        Vs = np.atleast_1d(np.asarray(p.V if V is None else V, dtype=float))
+        X = np.stack([self._trapezoid.x_of(float(v), p.t_a, p.t_d, p.ramp_bounds[0])
+                      for v in Vs])
+        return self._trapezoid.law(X, "linear")
 
     def seed_x(self, V: float | None = None) -> FloatArray:
         """The seed's law as a decision vector: one speed ``V`` (default ``params.V``) on every
-        segment, ``params.t_a``/``t_d``; t_b (irrelevant at equal speeds) = its lower bound."""
+        segment, ``params.t_a``/``t_d``; t_b (irrelevant at equal speeds) = its lower bound.
+        For a speed profile: the seed's speeds at the knots (its ramps interpolated)."""
+        if isinstance(self.encoding, SpeedProfile):
+            return self.encoding.x_of(self.seed_law(V))[0]
         p = self.params
         assert p.V is not None
-        v = p.V if V is None else V
-        if p.speeds == "single":
-            return np.array([v, p.t_a, p.t_d])
-        tail = [p.ramp_bounds[0]] if self.n_seg > 1 else []
-        return np.array([v] * self.n_seg + [p.t_a, p.t_d] + tail)
+        return self.encoding.x_of(p.V if V is None else V, p.t_a, p.t_d, p.ramp_bounds[0])
 
     def time_law(self, X: FloatArray, shape: RampShape | None = None) -> TimeLaw:
         """The arc-length laws of a batch (``shape`` overrides ``params.ramp``)."""
-        V, t_a, t_d, t_b = self.split(X)
-        return build_time_law(self.path.lengths, V, t_a, t_d, t_b, shape or self.params.ramp)
+        return self.encoding.law(X, shape)
 
     # ------------------------------------------------------------------ batch simulation
     def simulate(
-        self, X: FloatArray, shape: RampShape | None = None, full: bool = True,
+        self, X: FloatArray | TimeLaw, shape: RampShape | None = None, full: bool = True,
         samples: int | None = None, extra_times: bool = False,
     ) -> dict[str, Any]:
-        """Whole-batch motion: ``t`` (B, K) s, tool ``p``/``pd``/``pdd``/``pddd`` (B, K, 3),
-        ``q``/``qd``/``qdd``/``jerk``/``tau`` (B, K, n), ``law``, ``E`` (B,) J, ``E_joint``
+        """Whole-batch motion of decision vectors ``X`` (or of time laws): ``t`` (B, K) s,
+                tool ``p``/``pd``/``pdd``/``pddd`` (B, K, 3), ``q``/``qd``/``qdd``/``jerk``/``tau``
+        (B, K, n), ``law``, ``E`` (B,) J, ``E_joint``
         (B, n) J, ``T`` (B,) s, and ``G`` (B, n_constr) on these K samples (``samples``,
         default ``n_samples``; with ``extra_times`` also the instants just before every
         phase boundary and just before and after every segment join, where q̈ jumps:
@@ -238,7 +259,7 @@ class PathTrackingProblem(StudyProblem):
         ``E``/``E_joint`` only when an objective is the energy. The joints by one numba pass
         (``compose_ppoly``), equal to ``compose_time_law(self.joints.derivatives(σ),
         σ-derivatives)``."""
-        law = self.time_law(X, shape)
+        law = X if isinstance(X, TimeLaw) else self.time_law(X, shape)
         B, n = law.T.shape[0], self.robot.nq
         if samples == 0:
             t = np.sort(self.edge_times(law), axis=1)
@@ -280,15 +301,15 @@ class PathTrackingProblem(StudyProblem):
     def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         sim = self.simulate(X, full=False)
         G = sim["G"]
-        if self.params.limit_check > 1:
-            G = self._dense_limits(X, G, self.params.limit_check)
+        if self.limit_check > 1:
+            G = self._dense_limits(X, G, self.limit_check)
         return self._objectives(sim), G
 
     def edge_times(self, law: TimeLaw) -> FloatArray:
         """(B, E) instants where the joint accelerations jump (:func:`.limits.edge_times`)."""
         return limits.edge_times(self, law)
 
-    def _dense_limits(self, X: FloatArray, G: FloatArray, factor: int,
+    def _dense_limits(self, X: FloatArray | TimeLaw, G: FloatArray, factor: int,
                       shape: RampShape | None = None, every: bool = False) -> FloatArray:
         return limits.dense_limits(self, X, G, factor, shape, every)
 
@@ -299,8 +320,16 @@ class PathTrackingProblem(StudyProblem):
         if x.shape[1] != self.n_var:
             raise ValueError(f"x: expected {self.n_var} values {self.variable_names}, "
                              f"got {x.shape[1]}")
-        sim = self.simulate(x, shape)
-        law: TimeLaw = sim["law"]
+        return self.decode_law(self.time_law(x, shape), x[0], self.encoding.metrics(x[0]), shape)
+
+    def decode_law(self, law: TimeLaw, x: FloatArray | None = None,
+               encoded: dict[str, float] | None = None, shape: RampShape | None = None
+               ) -> Solution:
+        """The Solution of one time ``law`` (B = 1): of the decision vector ``x`` when it has
+        one in this problem's encoding (else None: a baseline of another form), ``encoded``
+        what its own parameters say (t_a, V_k, …: put into the metrics)."""
+        encoded = encoded or {}
+        sim = self.simulate(law)
         t = sim["t"][0]
         q, qd, qdd, jerk, tau = (sim[k][0] for k in ("q", "qd", "qdd", "jerk", "tau"))
         T_tool = kinematics.fk(self.robot, q)
@@ -308,11 +337,10 @@ class PathTrackingProblem(StudyProblem):
         power = tau * qd
         energy = _cumulative_trapezoid(np.abs(power).sum(axis=1), t)
         G = sim["G"][0]
-        if self.params.limit_check > 1:
-            G = self._dense_limits(x, sim["G"], self.params.limit_check, shape)[0]
+        if self.limit_check > 1:
+            G = self._dense_limits(law, sim["G"], self.limit_check)[0]
         cv = float(constraint_violation(G[None, :])[0])
         seg_T = law.segment_times()[0]
-        V, t_a, t_d, t_b = (a[0] for a in self.split(x))
         jm = joint_metrics(t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=tool)
         table: list[dict[str, Any]] = [
             {"metric": row.label, "key": row.key, "unit": row.unit, "values": list(row.per_joint)}
@@ -340,14 +368,11 @@ class PathTrackingProblem(StudyProblem):
             "qd_use_max": float(np.max(jm.omega_max / self.robot.qd_max)),
             "qdd_use_max": float(np.max(np.abs(qdd).max(axis=0) / self.qdd_max)),
             "tau_use_max": float(np.max(jm.tau_max / self.robot.tau_max)),
-            "t_a": float(t_a),
-            "t_d": float(t_d),
-            "t_b": float(t_b),
             "ramp_shrink": float(law.shrink[0]),
+            **encoded,
         }
         for k in range(self.n_seg):
             metrics[f"T_{k + 1}"] = float(seg_T[k])
-            metrics[f"V_{k + 1}"] = float(V[k])
         e_path, e_rot = self.tool.errors(T_tool, sim["p"][0])
         motion = Motion(
             t=t,
@@ -366,9 +391,6 @@ class PathTrackingProblem(StudyProblem):
         extra = {
             "variable_names": list(self.variable_names),
             "segment_times": seg_T.tolist(),
-            "segment_speeds": V.tolist(),
-            "segment_profiles": segment_profiles(V),
-            "ramp": shape or self.params.ramp,
             "orientation": self.tool.describe(),
             "rest": self.rest.tolist(),
             "qdd_max": self.qdd_max.tolist(),
@@ -377,9 +399,16 @@ class PathTrackingProblem(StudyProblem):
             "orientation_error": float(e_rot.max()),
             "path_error": float(e_path.max()),
         }
+        if "V_1" in encoded:  # a trapezoid law: its cruise speeds and ramp shape
+            V = [encoded[f"V_{k + 1}"] for k in range(self.n_seg)]
+            extra |= {"segment_speeds": V, "segment_profiles": segment_profiles(np.array(V)),
+                      "ramp": shape or self.params.ramp}
+        else:
+            extra |= {"ramp": "profile", "knots": law.sigma_start[0].tolist() + [
+                float(self.path.lengths.sum())]}
         objectives = {name: metrics[name] for name in self.objective_names}
-        return Solution(x=x[0].copy(), objectives=objectives, metrics=metrics, table=table,
-                        motion=motion, extra=extra)
+        return Solution(x=None if x is None else np.array(x, dtype=float), objectives=objectives,
+                        metrics=metrics, table=table, motion=motion, extra=extra)
 
     def violations(self, x: FloatArray) -> tuple[Violation, ...]:
         """Every limit the motion of ``x`` breaks, on its samples and on a resampling of at
@@ -392,67 +421,53 @@ class PathTrackingProblem(StudyProblem):
     @cached_property
     def seed_max_V(self) -> float:
         """Largest single V (m/s) for which the seed's scheme (t_a, t_d of ``params``, linear
-        ramps) satisfies every constraint; found by two batched scans of the V box."""
-        assert self.params.V_bounds is not None
-        lo, hi = self.params.V_bounds
-        best = float("nan")
-        for _ in range(3):
-            Vs = np.linspace(lo, hi, 41)
-            X = np.stack([self.seed_x(v) for v in Vs])
-            G = self.simulate(X, "linear", full=False)["G"]
-            if self.params.limit_check > 1:
-                G = self._dense_limits(X, G, self.params.limit_check, "linear")
-            ok = np.all(G <= 0.0, axis=1)
-            if not ok.any():
-                break
-            i = int(np.flatnonzero(ok).max())
-            best = float(Vs[i])
-            if i == Vs.size - 1:
-                break
-            lo, hi = Vs[i], Vs[i + 1]
-        return best
+        ramps) satisfies every constraint (:func:`.baselines.seed_max_V`)."""
+        return baselines.seed_max_V(self)
+
+    @cached_property
+    def time_optimal(self) -> optimal.PhysicalMinimum | None:
+        """The physical minimum: TOPP-RA's profile on a fine grid, holding every limit on a
+        dense resampling (:func:`.optimal.physical_minimum`); None when none exists."""
+        return optimal.physical_minimum(self)
 
     def baseline_solutions(self) -> dict[str, Solution]:
-        """``seed``: the paper's law; ``seed_max_V``: the same scheme at the fastest feasible V
-        (both with the seed's linear ramps)."""
-        out = {"seed": self.solution(self.seed_x(), "linear")}
-        v = self.seed_max_V
-        if math.isfinite(v):
-            out["seed_max_V"] = self.solution(self.seed_x(v), "linear")
-        return out
+        """``time_optimal``: the physical minimum (TOPP-RA); ``seed``: the paper's law;
+        ``seed_max_V``: the same scheme at the fastest feasible V (:mod:`.baselines`)."""
+        return baselines.baseline_solutions(self)
+
+    def reference_optimum(self) -> dict[str, Any] | None:
+        """For a ``time`` objective: the physical minimum's cycle time, the value no time law
+        can beat on this path under these limits (:func:`.baselines.reference_optimum`)."""
+        return baselines.reference_optimum(self)
+
+    def initial_points(self) -> FloatArray | None:
+        """With a speed profile: TOPP-RA's profile on the knots (limits holding on a dense
+        resampling), slower copies of it, and the seed law on the knots — where the
+        population starts (None for the trapezoid encodings: a uniform random start)."""
+        return self._starts if isinstance(self.encoding, SpeedProfile) else None
+
+    @cached_property
+    def _starts(self) -> FloatArray:
+        return optimal.initial_points(self)
+
+    def free_start(self) -> tuple[str, FloatArray] | None:
+        """With a speed profile: the time-optimal profile on the knots, which the population
+        starts from (no search needed to get it)."""
+        x = self.initial_points()
+        if x is None:
+            return None
+        return "the time-optimal profile on the knots (TOPP-RA)", x[0]
 
     def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
         """The front in readable form with the % change of each objective against the seed
-        law — only when that law is feasible on this arm (else None, and ``change_pct_reason``
-        says which limits it breaks)."""
-        x_seed = self.seed_x()
-        seed = self._objectives(self.simulate(x_seed[None, :], "linear"))[0]
-        broken = self._seed_violations()
-        rows = []
-        for x, f in zip(np.atleast_2d(front_X), np.atleast_2d(front_F), strict=True):
-            row: dict[str, Any] = {
-                name: float(v) for name, v in zip(self.variable_names, x, strict=True)}
-            row |= {name: float(v) for name, v in zip(self.objective_names, f, strict=True)}
-            row |= {f"{name}_change_pct": None if broken else float(100.0 * (v / s - 1.0))
-                    for name, v, s in zip(self.objective_names, f, seed, strict=True)}
-            rows.append(row)
-        rows.sort(key=lambda r: r[self.objective_names[0]])
-        out: dict[str, Any] = {
-            "seed_objectives": dict(zip(self.objective_names, seed.tolist(), strict=True)),
-            "seed_feasible": not broken,
-            "seed_max_V": self.seed_max_V,
-            "front": rows,
-        }
-        if broken:
-            out["change_pct_reason"] = (
-                "no % change: the reference (the paper's time law) is infeasible on "
-                f"{self.robot.name}: " + "; ".join(v.text for v in broken))
-        return out
+        law — only when that law is feasible on this arm (else None, and
+        ``change_pct_reason`` says which limits it breaks) — and the physical minimum."""
+        return baselines.extras(self, front_X, front_F)
 
-    def _seed_violations(self) -> tuple[Violation, ...]:
+    def seed_violations(self) -> tuple[Violation, ...]:
         """What the seed law (linear ramps) violates on this arm (cached)."""
         cached: tuple[Violation, ...] | None = getattr(self, "_seed_broken", None)
         if cached is None:
-            cached = limits.limit_violations(self, self.seed_x(), "linear")
+            cached = limits.limit_violations(self, self.seed_law())
             self._seed_broken = cached
         return cached

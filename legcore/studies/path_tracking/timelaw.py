@@ -19,6 +19,13 @@ All quantities are arrays over a batch of B candidate laws; evaluation takes tim
 If the ramps ask for more distance than a segment has (``fit`` > 1), :func:`build_time_law`
 shrinks all ramp durations of that candidate by one factor so that they fit (the problem
 reports the original ``fit`` as a constraint): every law it returns is valid.
+
+:func:`profile_law` builds the other kind of law, a *speed profile* over arc length: speeds
+v_0 = 0, v_1 … v_{M−1}, v_M = 0 at fixed knots σ_0 = 0 < … < σ_M = L with a constant tangential
+acceleration between two knots (σ̇² linear in σ: each interval is a ``"linear"`` ramp phase
+from v_i to v_{i+1} of duration 2 (σ_{i+1} − σ_i) / (v_i + v_{i+1})). This is the form of a
+time-optimal path parametrisation (TOPP-RA's piecewise-constant path acceleration), so it
+can represent the time-optimal profile on its knots.
 """
 
 from __future__ import annotations
@@ -29,10 +36,12 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["RampShape", "TimeLaw", "build_time_law", "segment_profiles"]
+__all__ = ["RampShape", "TimeLaw", "build_time_law", "profile_law", "segment_profiles"]
 
 FloatArray = NDArray[np.float64]
 RampShape = Literal["linear", "cubic"]
+
+_FEW_PHASES = 32  # up to this many phase starts, a phase is found by direct comparison
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,7 +72,16 @@ class TimeLaw:
 
     def phase_of(self, t: FloatArray) -> NDArray[np.int64]:
         """Index (B, K) of the phase running at times ``t`` (B, K) s (later phase at a tie)."""
-        return np.sum(t[..., None] >= self.t_start[:, None, 1:], axis=-1).astype(np.int64)
+        return _count_at_or_below(self.t_start[:, 1:], t)
+
+    def subset(self, rows: NDArray[np.bool_] | NDArray[np.int64]) -> TimeLaw:
+        """The laws of the candidates ``rows`` (a mask or indices over B)."""
+        pick = lambda a: a[rows]  # noqa: E731
+        return TimeLaw(
+            duration=pick(self.duration), t_start=pick(self.t_start),
+            sigma_start=pick(self.sigma_start), v_start=pick(self.v_start),
+            v_end=pick(self.v_end), T=pick(self.T), lengths=self.lengths, fit=pick(self.fit),
+            shrink=pick(self.shrink), shape=self.shape)
 
     def evaluate(self, t: FloatArray) -> FloatArray:
         """σ, σ̇, σ̈, σ⃛ at times ``t`` (B, K) in [0, T] s → (4, B, K) (m, m/s, m/s², m/s³).
@@ -123,7 +141,7 @@ class TimeLaw:
         u = np.broadcast_to(np.linspace(0.0, 1.0, K), (B, K))
         # phase of each u: the last one starting at or before u (zero-share phases have an
         # empty interval [U_j, U_j+1) and are skipped; the last ramp always has a share)
-        idx = np.sum(u[..., None] >= U[:, None, 1:P], axis=-1).astype(np.int64)
+        idx = _count_at_or_below(U[:, 1:P], u)
         take = lambda a: np.take_along_axis(a, idx, axis=1)  # noqa: E731
         v = np.clip((u - take(U[:, :-1])) / take(np.where(w > 0.0, w, 1.0)), 0.0, 1.0)
         t = take(self.t_start) + take(self.duration) * 0.5 * (1.0 - np.cos(np.pi * v))
@@ -224,6 +242,57 @@ def build_time_law(
         shrink=shrink,
         shape=shape,
     )
+
+
+def profile_law(lengths: FloatArray, knots: FloatArray, v: FloatArray) -> TimeLaw:
+    """Speed profiles of B candidates as laws (module docstring): ``knots`` (M + 1,) m from 0
+    to L = Σ ``lengths`` (strictly increasing), ``v`` (B, M + 1) m/s the speed at each knot
+    (≥ 0; v_0 = v_M = 0 for rest to rest; two consecutive zeros are refused: the tool would
+    never leave that interval). One ``"linear"`` phase per interval; ``fit`` is 0 (no ramp
+    asks for distance) and ``shrink`` 1."""
+    D = np.asarray(lengths, dtype=float)
+    s = np.asarray(knots, dtype=float)
+    v = np.atleast_2d(np.asarray(v, dtype=float))
+    B = v.shape[0]
+    if v.shape[1] != s.size or s.size < 2:
+        raise ValueError(f"v: expected {s.size} knot speeds per candidate, got {v.shape}")
+    if not np.all(np.diff(s) > 0.0) or abs(s[-1] - D.sum()) > 1e-9 * max(1.0, D.sum()):
+        raise ValueError("knots: must increase strictly from 0 to the path length")
+    ds = np.diff(s)
+    pair = v[:, :-1] + v[:, 1:]
+    if np.any(pair <= 0.0) or np.any(v < 0.0):
+        raise ValueError("v: knot speeds must be ≥ 0, and never 0 at two knots in a row")
+    duration = 2.0 * ds / pair
+    t_start = np.concatenate([np.zeros((B, 1)), np.cumsum(duration, axis=1)[:, :-1]], axis=1)
+    return TimeLaw(
+        duration=duration,
+        t_start=t_start,
+        sigma_start=np.broadcast_to(s[:-1], (B, ds.size)).copy(),
+        v_start=v[:, :-1].copy(),
+        v_end=v[:, 1:].copy(),
+        T=t_start[:, -1] + duration[:, -1],
+        lengths=D.copy(),
+        fit=np.zeros((B, D.size)),
+        shrink=np.ones(B),
+        shape="linear",
+    )
+
+
+def _count_at_or_below(starts: FloatArray, t: FloatArray) -> NDArray[np.int64]:
+    """For each row b, how many of ``starts[b]`` (B, P, non-decreasing) are ≤ each ``t[b]``
+    (B, K). A few phases: one comparison per phase (exact). Many (a speed profile): one
+    ``searchsorted`` over the rows laid end to end, each row shifted by its index × a span
+    larger than any value so that rows never mix (exact up to the rounding of that shift,
+    ~B · T · 1e-16 s)."""
+    B = starts.shape[0]
+    if starts.shape[1] <= _FEW_PHASES:
+        return np.sum(t[..., None] >= starts[:, None, :], axis=-1).astype(np.int64)
+    lo = min(float(starts.min()), float(t.min()))
+    span = max(float(starts.max()), float(t.max())) - lo + 1.0
+    shift = (np.arange(B) * span)[:, None]
+    flat = ((starts - lo) + shift).ravel()
+    pos = np.searchsorted(flat, ((t - lo) + shift).ravel(), side="right").reshape(t.shape)
+    return (pos - (np.arange(B) * starts.shape[1])[:, None]).astype(np.int64)
 
 
 def segment_profiles(V: FloatArray) -> list[str]:

@@ -10,6 +10,7 @@ from fastapi import APIRouter, HTTPException, Query, status
 from fastapi.responses import StreamingResponse
 
 from services.api.convergence import ConvergenceRow, convergence
+from services.api.dashboard_schemas import BaselineMark
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.export_formats import MEDIA_TYPES, ExportFormat, encode, filename
 from services.api.points import point_metrics
@@ -105,11 +106,14 @@ def export_front(
     (``metric.<name>``, SI units: the labels and units are those of `GET /jobs/{id}/front`'s
     ``metrics``; decoded again from the point's decision vector the first time, then cached —
     503 with ``Retry-After`` while a large front's are being computed; left out when the job's
-    spec cannot be decoded any more) and each decision variable (x1, x2, …)."""
+    spec cannot be decoded any more) and each decision variable (x1, x2, …); then one row per
+    baseline (the study's references, e.g. the paper's law or the physical minimum: no index,
+    its name in the last column, ``baseline``)."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         points = repo.list_pareto(session, job.id)
         names = objective_names(repo.get_result_objectives(session, job.id))
+        baselines = repo.list_baselines(session, job.id)
     per_point, state, _note = point_metrics(ctx, job, bool(points))
     if state == "pending":
         raise HTTPException(
@@ -121,12 +125,17 @@ def export_front(
     names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
     n = max((len(p.x or []) for p in points), default=0)
     metrics = list(dict.fromkeys(k for v in per_point.values() if v for k in v))
-    columns = ["index", *names, *[f"metric.{k}" for k in metrics], *[f"x{i + 1}" for i in range(n)]]
-    rows = (
+    columns = ["index", *names, *[f"metric.{k}" for k in metrics], *[f"x{i + 1}" for i in range(n)],
+               "baseline"]  # fmt: skip
+    rows = [
         (p.index, *_pad(p.objectives, m),
-         *[(per_point.get(p.index) or {}).get(k) for k in metrics], *_pad(p.x, n))
+         *[(per_point.get(p.index) or {}).get(k) for k in metrics], *_pad(p.x, n), None)
         for p in points
-    )  # fmt: skip
+    ]  # fmt: skip
+    for b in baselines:
+        mark = BaselineMark.from_record(b, names)
+        rows.append((None, *_pad(mark.objectives, m), *[mark.metrics.get(k) for k in metrics],
+                     *[None] * n, b.name))  # fmt: skip
     return _download(format, f"job-{job.id[:8]}-front", columns, rows)
 
 

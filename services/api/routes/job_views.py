@@ -34,7 +34,7 @@ from services.api.schemas import ErrorOut, objective_names
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.errors import ArtifactError
-from services.store.records import BaselineRecord, JobRecord
+from services.store.records import JobRecord
 from services.store.tables import JobStatus
 
 router = APIRouter(tags=["dashboard"])
@@ -81,19 +81,6 @@ def get_spec_yaml(job_id: str, key: CurrentKey, ctx: Context) -> Response:
     )
 
 
-def _baseline_mark(b: BaselineRecord, names: list[str]) -> BaselineMark | None:
-    doc: dict[str, Any] = b.metrics if isinstance(b.metrics, dict) else {}
-    raw_obj, raw_met = doc.get("objectives"), doc.get("metrics")
-    objectives: dict[str, Any] = raw_obj if isinstance(raw_obj, dict) else {}
-    metrics: dict[str, Any] = raw_met if isinstance(raw_met, dict) else doc
-    values = [_num(objectives.get(n)) for n in names]
-    return BaselineMark(
-        name=b.name,
-        objectives=values,
-        metrics={k: v for k, v in metrics.items() if isinstance(v, int | float | str | bool)},
-    )
-
-
 @router.get(
     "/jobs/{job_id}/front",
     response_model=FrontOut,
@@ -135,7 +122,7 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
                 for p in points
             ]
             best_index = points[dist.index(min(dist))].index
-    marks = [m for b in baselines if (m := _baseline_mark(b, names)) is not None]
+    marks = [BaselineMark.from_record(b, names) for b in baselines]
     objective_quantities = quantities(names, kind)
     per_point, state, note = point_metrics(ctx, job, bool(points))
     # the result's order (as the job's metric table), then any only the points have

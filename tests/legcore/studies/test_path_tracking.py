@@ -367,8 +367,14 @@ def test_optimised_time_respects_every_limit_and_beats_the_seed(arm):
     assert best.extra["path_error"] < 1e-9 and best.extra["orientation_error"] < 1e-12
     # the ramps last what the acceleration limit allows, not milliseconds
     assert min(best.metrics["t_a"], best.metrics["t_d"]) > 0.05
-    assert set(res.baselines) == {"seed", "seed_max_V"}
+    assert set(res.baselines) == {"time_optimal", "seed", "seed_max_V"}
     assert res.baselines["seed_max_V"].metrics["feasible"] == 1.0
+    # the physical minimum (TOPP-RA) is a lower bound of every feasible law, and feasible
+    T_star = res.baselines["time_optimal"].objectives["time"]
+    assert res.baselines["time_optimal"].violations == ()
+    assert T_star < best.objectives["time"]
+    assert res.gap is not None and res.gap["reference"] == pytest.approx(T_star)
+    assert res.gap["pct"] == pytest.approx(100 * (best.objectives["time"] / T_star - 1))
     assert res.extras["front"][0]["time_change_pct"] < -50.0
     text = json.dumps(res.to_dict(), allow_nan=False)
     assert '"seed_max_V"' in text

@@ -139,7 +139,11 @@ def test_front_has_named_objectives_baselines_and_hypervolume(env: dict[str, Any
     assert [o["unit"] for o in front["objectives"]] == ["s", "J"]
     assert [o["axis"] for o in front["objectives"]][0] == "cycle time [s]"
     assert front["points"] and front["best_index"] is not None
-    assert {b["name"] for b in front["baselines"]} == {"seed", "seed_max_V"}
+    assert {b["name"] for b in front["baselines"]} == {"time_optimal", "seed", "seed_max_V"}
+    # the physical minimum (TOPP-RA) is a marked point, faster than every front point
+    fastest = min(p["objectives"][0] for p in front["points"])
+    mark = next(b for b in front["baselines"] if b["name"] == "time_optimal")
+    assert mark["objectives"][0] < fastest
     assert all(len(b["objectives"]) == 2 for b in front["baselines"])
     # the paper's own numbers: seed 004 printed only the time of its law (not plottable alone)
     paper = front["paper"]
@@ -350,6 +354,10 @@ def test_front_points_carry_their_metrics_decoded_once(env: dict[str, Any]) -> N
     assert [p["metrics"] for p in again["points"]] == [p["metrics"] for p in points]
     assert r.status_code == 200, r.text
     rows = list(csv.DictReader(io.StringIO(r.text)))
+    marks = [r for r in rows if r["baseline"]]  # the baselines follow the front's points
+    assert {r["baseline"] for r in marks} == {"time_optimal", "seed", "seed_max_V"}
+    assert all(r["index"] == "" and float(r["time"]) > 0 for r in marks)
+    rows = [r for r in rows if not r["baseline"]]
     assert len(rows) == len(points)
     metric_columns = [c for c in rows[0] if c.startswith("metric.")]
     assert "metric.energy" in metric_columns and "metric.time" in metric_columns

@@ -88,11 +88,11 @@ export async function render(main, jobId) {
   // The verdict of a succeeded job (GET /jobs/{id}: feasible, violations); the task's rules
   // are added once the result is loaded.
   let verdictJob = null;
-  function drawVerdict(job, task = null) {
+  function drawVerdict(job, task = null, gap = null) {
     verdictJob = job;
     if (job.status !== "succeeded" || job.feasible === null || job.feasible === undefined) {
       verdict.className = "";
-      fill(verdict, task ? h("div.card", taskBlock(task)) : null);
+      fill(verdict, task || gap ? h("div.card", gapBlock(gap), task ? taskBlock(task) : null) : null);
       return;
     }
     const ok = job.feasible === true;
@@ -104,7 +104,22 @@ export async function render(main, jobId) {
       ok ? null : h("ul.violations#violations", job.violations.map((v) => h("li", { dataset: { constraint: v.constraint } }, violationText(v)))),
       ok ? null : h("p.muted", "The run completed (status succeeded), but this answer breaks the constraints above: "
         + "relax them, change the task, or give the optimiser more budget."),
+      gapBlock(gap),
       task ? taskBlock(task) : null);
+  }
+
+  // How far a single-objective optimum is from the best its problem allows (GET
+  // /jobs/{id}/result: gap), or why there is no such reference.
+  function gapBlock(gap) {
+    if (!gap || !gap.objective) return null;
+    if (gap.reference === null || gap.reference === undefined) {
+      return h("p#gap.muted", { dataset: { gap: "none" } }, `No optimality gap: ${gap.reason || "no reference"}.`);
+    }
+    const pct = gap.pct === null || gap.pct === undefined ? "—" : `${gap.pct >= 0 ? "+" : ""}${num(gap.pct, 3)} %`;
+    return h("p#gap", { dataset: { gap: "reference" } },
+      h("strong", `Gap to the ${gap.kind || "reference"}: ${pct}`),
+      ` — ${gap.objective} ${num(gap.value)} vs ${num(gap.reference)}`,
+      gap.method ? h("span.muted", ` (${gap.method})`) : null);
   }
 
   function taskBlock(task) {
@@ -134,7 +149,7 @@ export async function render(main, jobId) {
     const [f, result] = await Promise.all([api(`/jobs/${job.id}/front`), api(`/jobs/${job.id}/result`)]);
     if (!alive) return;
     front = f;
-    if (result.task && verdictJob) drawVerdict(verdictJob, result.task);
+    if ((result.task || result.gap) && verdictJob) drawVerdict(verdictJob, result.task, result.gap);
     if (generations.length) convergencePlot(conv, generations, front.objectives);
     frontPlot(frontEl, front, pick);
     drawFrontTable();
