@@ -7,8 +7,9 @@ dense resampling).
 Per case and encoding: the optimum's T (mean ± sd over the seeds; every optimum is checked on a
 dense resampling — "feasible" counts those that hold), the physical minimum T*, the ratio T / T*
 (mean, worst), and the Mann–Whitney U test (two-sided) of the N optimum times of the two
-encodings. The cases: seed 004's example and the UR5 and Panda presets (their URDFs from the
-example-robot-data wheel).
+encodings. Then ``objective: energy_time`` with the speed profile: the front's fastest point
+over T* and its lowest energy against the paper's law's. The cases: seed 004's example and the
+UR5 and Panda presets (their URDFs from the example-robot-data wheel).
 
     .venv/bin/python benchmarks/bench_time_optimal.py              # N = 10
     .venv/bin/python benchmarks/bench_time_optimal.py --seeds 3 --only ur5
@@ -74,6 +75,26 @@ def one(name: str, path: Path, seeds: list[int]) -> list[str]:
     return out
 
 
+def front_span(name: str, path: Path, seeds: list[int]) -> str:
+    """``objective: energy_time`` with the speed profile: the front's fastest point over T*,
+    and its lowest energy against the paper's law's (the start)."""
+    base = _spec(path)
+    fast, low, seed_E = [], [], float("nan")
+    for seed in seeds:
+        spec = {**base, "seed": seed, "record": False,
+                "problem": {**base["problem"], "speeds": "profile", "objective": "energy_time"}}
+        res = run(spec)
+        F = np.array([p["objectives"] for p in res.pareto])
+        T_star = res.baselines["time_optimal"].objectives["time"]
+        fast.append(F[:, 0].min() / T_star)
+        low.append(F[:, 1].min())
+        seed_E = res.baselines["seed"].objectives["energy"]
+    f, e = np.array(fast), np.array(low)
+    return (f"| {name} | {f.mean():.4f}× (worst {f.max():.4f}×) | {e.mean():.4f} ± "
+            f"{e.std(ddof=1) if e.size > 1 else 0:.4f} | {seed_E:.4f} | "
+            f"{int(np.sum(e <= seed_E))}/{e.size} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=10)
@@ -88,6 +109,13 @@ def main() -> None:
             continue
         for line in one(name, path, seeds):
             print(line, flush=True)
+    print("\n| case | energy_time front: fastest T / T* | lowest energy J (mean ± sd) | paper's "
+          "law's energy J | seeds with lowest ≤ the law's |")
+    print("|---|---|---|---|---|")
+    for name, path in CASES.items():
+        if args.only and args.only not in name:
+            continue
+        print(front_span(name, path, seeds), flush=True)
 
 
 if __name__ == "__main__":

@@ -152,3 +152,36 @@ def test_004_minimum_time_headline_matches_a_fresh_run() -> None:
     assert best["feasible"] == 1.0
     assert max(best["qd_use_max"], best["qdd_use_max"], best["tau_use_max"]) <= 1.0 + 1e-9
     assert doc["baselines"]["seed"]["objectives"]["time"] == pytest.approx(paper, abs=0.005)
+
+
+def test_004_physical_minimum_and_speed_profile_match_fresh_runs() -> None:
+    """Issue 19: "TOPP-RA's physical minimum of the same path under the same limits is
+    3.3602 s … `speeds: profile` reaches 3.3747 ± 0.0001 s (10 seeds; seed 1: 3.3747 s)"."""
+    row = _summary_row("004")
+    (physical,) = _parse(r"physical minimum of the same path under the same limits is NUM s", row)
+    mean, sd, seed, one = _parse(
+        r"`speeds: profile` reaches NUM ± NUM s \(10 seeds; seed NUM: NUM s", row)
+    doc = _fresh("004_path_tracking.yaml", int(seed))
+    assert doc["baselines"]["time_optimal"]["objectives"]["time"] == pytest.approx(
+        physical, abs=physical.rounding)
+    with open(ROOT / "examples" / "004_path_tracking.yaml") as fh:
+        spec = yaml.safe_load(fh)
+    spec["problem"]["speeds"] = "profile"
+    prof = run({**spec, "seed": int(seed), "record": False}).to_dict()
+    assert prof["feasible"] is True
+    assert prof["best"]["objectives"]["time"] == pytest.approx(one, abs=one.rounding)
+    _within_spread(prof["best"]["objectives"]["time"], mean, sd)
+    assert prof["gap"]["reference"] == pytest.approx(physical, abs=physical.rounding)
+
+
+def test_004_energy_time_front_range_matches_a_fresh_run() -> None:
+    """"front of example 2, seed 1: from 4.305 s / 14.47 J to 41.56 s / 14.13 J"."""
+    text = DOC.read_text()
+    t0, e0, t1, e1 = _parse(
+        r"front of example 2, seed 1: from NUM s / NUM J to NUM s / NUM J", text)
+    doc = _fresh("004_path_tracking_energy_time.yaml", 1)
+    front = sorted(p["objectives"] for p in doc["pareto"])
+    assert front[0][0] == pytest.approx(t0, abs=t0.rounding)
+    assert front[0][1] == pytest.approx(e0, abs=e0.rounding)
+    assert front[-1][0] == pytest.approx(t1, abs=t1.rounding)
+    assert front[-1][1] == pytest.approx(e1, abs=e1.rounding)

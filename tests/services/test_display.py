@@ -249,3 +249,27 @@ def test_status_marks_an_infeasible_job_in_red(monkeypatch: pytest.MonkeyPatch) 
     block = _text(job_block(job))
     assert "succeeded (infeasible), attempt 1" in block
     assert "INFEASIBLE: stability_margin_mm over its limit by 17.64 mm" in block
+
+
+def test_the_gap_to_the_physical_minimum_is_a_line_of_the_block() -> None:
+    """Issue 19: a single-objective result states how far it is from the best its problem
+    allows (path_tracking: TOPP-RA), or why it has no such reference."""
+    from services.display_verdict import gap_line
+
+    gap = {"objective": "time", "value": 3.3914, "reference": 3.3602,
+           "kind": "physical minimum", "method": "TOPP-RA on 2000 intervals", "pct": 0.9286}
+    view = _gait(feasible=True, start_feasible=True)
+    view.gap = gap
+    text = _text(summary_block(view, title="t", spec={"problem": {"kind": "quadruped_gait"}}))
+    line = next(ln for ln in text.splitlines() if "gap" in ln).strip()
+    assert line == ("gap to the physical minimum: +0.929 % (3.3914 s vs 3.3602 s, TOPP-RA on "
+                    "2000 intervals)")
+    none = gap_line({"objective": "energy_per_metre", "reference": None, "reason": "no exact"})
+    assert none is not None and none.plain.strip() == "no optimality gap: no exact"
+    assert gap_line({"reference": None, "reason": "several objectives"}) is None
+    assert gap_line(None) is None
+    # from the API's result (GET /jobs/{id}/result: gap) and from result.json alike
+    api = ResultView.from_api("path_tracking", {"objective_names": ["time"], "gap": gap,
+                                                "objectives": {"names": ["time"],
+                                                               "values": {"time": 3.3914}}})
+    assert api.gap == gap

@@ -59,6 +59,15 @@ LONG: dict[str, Any] = {
 #: margin no step has, which succeeds with an infeasible optimum.
 FEASIBLE_GAIT: dict[str, Any] = {**GAIT, "name": "browser gait, 1 mm margin"}
 INFEASIBLE_GAIT: dict[str, Any] = {**UNSTABLE, "name": "browser gait, 20 mm margin"}
+#: Seed 004's minimum time with a speed profile: its gap to the physical minimum (TOPP-RA).
+MIN_TIME: dict[str, Any] = {
+    "name": "browser minimum time",
+    "problem": {"kind": "path_tracking", "speeds": "profile"},
+    "optimizer": {"kind": "nsga2", "params": {"pop_size": 12}},
+    "budget": {"generations": 3},
+    "seed": 1,
+    "record": False,
+}
 #: The stylesheet's red and green (--bad, --ok), as the browser computes them.
 RED, GREEN = "rgb(192, 57, 43)", "rgb(31, 138, 76)"
 TIMEOUT_MS = 60_000
@@ -310,6 +319,7 @@ def test_the_verdict_is_red_or_green(page: Any, stack: Stack, shots: Path) -> No
     with stack.client() as c:
         bad_id = c.submit(INFEASIBLE_GAIT)["id"]
         good_id = c.submit(FEASIBLE_GAIT)["id"]
+        fast_id = c.submit(MIN_TIME)["id"]
     bad = stack.wait_for(bad_id, lambda j: j["status"] == "succeeded")
     good = stack.wait_for(good_id, lambda j: j["status"] == "succeeded")
     assert bad["feasible"] is False and good["feasible"] is True, (bad, good)
@@ -349,7 +359,22 @@ def test_the_verdict_is_red_or_green(page: Any, stack: Stack, shots: Path) -> No
     assert page.inner_text("#verdict h2").startswith("Feasible")
     assert _color(page, "#verdict h2") == GREEN
     assert page.locator("#violations").count() == 0
+    # a study without an exact reference says so (issue 19)
+    page.wait_for_selector("#verdict #gap[data-gap='none']")
+    assert page.inner_text("#gap").startswith("No optimality gap")
     page.screenshot(path=shots / "job-feasible.png", full_page=True)
+
+    # the minimum time's gap to the physical minimum (TOPP-RA), and its marked point
+    stack.wait_for(fast_id, lambda j: j["status"] == "succeeded")
+    with stack.client() as c:
+        gap = c.result(fast_id)["gap"]
+    assert gap["kind"] == "physical minimum" and gap["pct"] >= 0.0, gap
+    page.goto(f"{stack.url}/#/job/{fast_id}")
+    page.wait_for_selector("#verdict #gap[data-gap='reference']")
+    text = page.inner_text("#gap")
+    assert text.startswith("Gap to the physical minimum: +") and "TOPP-RA" in text, text
+    page.wait_for_selector("#front-table tr[data-baseline='time_optimal']")
+    page.screenshot(path=shots / "job-gap.png", full_page=True)
     assert not page.legopt_errors, page.legopt_errors
 
 

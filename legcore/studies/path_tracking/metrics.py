@@ -14,6 +14,8 @@ M = MetricName
 #: Result key -> how it is shown (objective keys under their displayed name).
 METRICS: dict[str, MetricName] = {
     "energy": M("mechanical energy ∫|τ·ω|dt", "J", "min"),
+    "energy_shared": M("energy with a shared supply ∫max(Στ·ω, 0)dt", "J"),
+    "energy_net": M("net work ∫Στ·ω dt (perfect regeneration)", "J"),
     "tool_speed_max": M("largest tool speed", "m/s"),
     "qd_use_max": M("joint speed / limit (max)", ""),
     "qdd_use_max": M("joint acceleration / limit (max)", ""),

@@ -179,7 +179,7 @@ class Params(StudyParams):
     rest: tuple[Finite, ...] | None = Field(default=None, min_length=1, max_length=12)
     objective: Literal["time", "energy", "energy_time"] = "time"
     speeds: Literal["per_segment", "single", "profile"] = "per_segment"
-    profile_intervals: int = Field(default=96, ge=4, le=1000)
+    profile_intervals: int = Field(default=256, ge=4, le=1000)
     ramp: Literal["linear", "cubic"] = "linear"
     V: Finite | None = Field(default=None, gt=0.0)
     t_a: Finite = Field(default=SEED_T_A, gt=0.0)

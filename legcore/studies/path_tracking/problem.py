@@ -357,9 +357,15 @@ class PathTrackingProblem(StudyProblem):
              "values": (jm.tau_max / self.robot.tau_max).tolist()},
         ]
         T, E = float(sim["T"][0]), float(sim["E"][0])
+        P = power.sum(axis=1)  # W: the joints' mechanical powers summed
         metrics: dict[str, float] = {
             "time": T,
             "energy": E,
+            # one supply shared by the joints (a DC bus): what it gives, none taken back
+            "energy_shared": float(_cumulative_trapezoid(np.maximum(P, 0.0), t)[-1]),
+            # net work ∫ Σ τ q̇ dt: the change of the arm's mechanical energy (0 J rest to rest
+            # on a closed path; what perfect regeneration would cost)
+            "energy_net": float(_cumulative_trapezoid(P, t)[-1]),
             "feasible": float(cv <= 0.0),
             "cv": cv,
             "path_length": float(jm.path_length),

@@ -177,3 +177,21 @@ def test_optimality_gap() -> None:
     assert optimality_gap(("time", "energy"), {"time": 1, "energy": 2}, ref)["reference"] is None
     assert optimality_gap(("S",), {"S": 9.0}, {**ref, "objective": "S", "value": 10.0,
                                                "sense": "max"})["pct"] == pytest.approx(10.0)
+
+
+@pytest.mark.parametrize("kind", ["nsga2", "ga", "moead"])
+def test_the_first_population_starts_from_the_problems_initial_points(kind: str) -> None:
+    """Problem.initial_points (pymoo's ``sampling=`` array): the first rows of generation 1,
+    inside the box; the rest random. A problem without them keeps a random start."""
+    from legcore.optimizers import get_algorithm
+    from legcore.problems.benchmarks import get_benchmark
+
+    problem = get_benchmark("zdt1", n_var=4) if kind != "ga" else get_benchmark("sphere", n_var=4)
+    start = np.array([[0.5, 0.1, 0.2, 0.3], [2.0, -1.0, 0.5, 0.5]])  # the 2nd leaves the box
+    problem.initial_points = lambda: start  # type: ignore[method-assign]
+    algo = get_algorithm(kind, pop_size=8) if kind != "moead" else get_algorithm(
+        kind, n_subproblems=8, n_neighbors=4)
+    X = algo.setup(problem, seed=1).ask()
+    np.testing.assert_allclose(X[0], start[0])
+    np.testing.assert_allclose(X[1], np.clip(start[1], problem.xl, problem.xu))
+    assert X.shape[0] >= 8 and np.all((X >= problem.xl) & (X <= problem.xu))

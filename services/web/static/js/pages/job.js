@@ -113,7 +113,7 @@ export async function render(main, jobId) {
   function gapBlock(gap) {
     if (!gap || !gap.objective) return null;
     if (gap.reference === null || gap.reference === undefined) {
-      return h("p#gap.muted", { dataset: { gap: "none" } }, `No optimality gap: ${gap.reason || "no reference"}.`);
+      return h("p.muted#gap", { dataset: { gap: "none" } }, `No optimality gap: ${gap.reason || "no reference"}.`);
     }
     const pct = gap.pct === null || gap.pct === undefined ? "—" : `${gap.pct >= 0 ? "+" : ""}${num(gap.pct, 3)} %`;
     return h("p#gap", { dataset: { gap: "reference" } },
