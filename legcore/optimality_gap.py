@@ -2,10 +2,12 @@
 
 A study may know, for its single objective, a value no answer can beat — an exact solution of
 the same problem (``path_tracking``'s cycle time: TOPP-RA's time-optimal profile under the
-same limits, the *physical minimum*) — through ``StudyProblem.reference_optimum()``. Every
-single-objective result then says how far its optimum is from it; every other result says why
-it has no gap. Pure: takes the problem's reference and the optimum's objectives, returns a
-JSON-able dict (``result.json``'s ``gap``).
+same limits, the *physical minimum*) — through ``StudyProblem.reference_optimum()``. Where it
+knows none, a run with ``optimizer.refine`` has a best-known point: the optimiser's optimum
+polished by a gradient method (:func:`refined_reference`), and the gap says how far the
+optimiser ended from it. Every single-objective result then says how far it is; every other
+result says why it has no gap. Pure: takes the problem's reference and the optimum's
+objectives, returns a JSON-able dict (``result.json``'s ``gap``).
 """
 
 from __future__ import annotations
@@ -14,21 +16,46 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["NO_REFERENCE", "optimality_gap"]
+__all__ = ["NO_REFERENCE", "optimality_gap", "refined_reference"]
 
 #: Why a single-objective result of a study without a reference has no gap.
 NO_REFERENCE = ("no exact or gradient solution of this problem to compare with "
-                "(optimizer.refine polishes the optimum with a gradient method)")
+                "(optimizer.refine: true polishes the optimum with a gradient method and gives "
+                "its gap to that best-known point)")
+
+
+def refined_reference(objective_names: tuple[str, ...], objectives: Mapping[str, float],
+                      refine: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    """A best-known reference from ``optimizer.refine`` (its record: ``before``/``after`` the
+    minimised F, ``improved``, ``n_evals``): the optimiser's own optimum polished by SLSQP. The
+    gap it gives is the *optimiser's* end point's (``value``: before refinement) to that polish;
+    None without a refinement that improved a feasible point (or with several objectives)."""
+    if len(objective_names) != 1 or not refine or not refine.get("improved"):
+        return None
+    after, before = refine.get("after"), refine.get("before")
+    if not isinstance(after, int | float) or not isinstance(before, int | float):
+        return None
+    if float(refine.get("cv_after") or 0.0) > 0.0:
+        return None
+    shown = float(objectives[objective_names[0]])  # the reported (refined) optimum, as shown
+    sign = 1.0 if abs(shown - after) <= abs(shown + after) else -1.0  # maximised: F = −value
+    return {"objective": objective_names[0], "value": sign * float(after),
+            "optimiser_value": sign * float(before), "sense": "min" if sign > 0 else "max",
+            "kind": "best known (the optimiser's optimum refined by SLSQP)",
+            "method": f"{int(refine.get('n_evals') or 0)} more evaluations; the gap is the "
+                      "optimiser's own end point's"}
 
 
 def optimality_gap(objective_names: tuple[str, ...], objectives: Mapping[str, float],
                    reference: Mapping[str, Any] | None) -> dict[str, Any]:
     """The gap of an optimum (``objectives``: name → value in the objective's own units) to
-    the problem's ``reference`` (``{"objective", "value", "kind", "method"[, "sense"]}``, a
-    minimised objective unless ``sense`` is ``"max"``): ``{"objective", "value",
-    "reference", "kind", "method", "pct"}`` with ``pct`` = 100 (value − reference) / |reference|
-    for a minimised objective (≥ 0 unless the optimum beats the reference); without a
-    reference (or with several objectives) ``{"reference": None, "reason": …}``."""
+    the problem's ``reference`` (``{"objective", "value", "kind", "method"[, "sense",
+    "optimiser_value"]}``, a minimised objective unless ``sense`` is ``"max"``; with
+    ``optimiser_value`` — :func:`refined_reference` — the gap is that value's):
+    ``{"objective", "value", "reference", "kind", "method", "pct"}`` with ``pct`` =
+    100 (value − reference) / |reference| for a minimised objective (≥ 0 unless the optimum
+    beats the reference); without a reference (or with several objectives)
+    ``{"reference": None, "reason": …}``."""
     if len(objective_names) != 1:
         return {"reference": None,
                 "reason": "several objectives: a front has no single gap (its fastest or "
@@ -36,7 +63,8 @@ def optimality_gap(objective_names: tuple[str, ...], objectives: Mapping[str, fl
     name = objective_names[0]
     if reference is None or reference.get("objective") != name:
         return {"objective": name, "reference": None, "reason": NO_REFERENCE}
-    value, ref = float(objectives[name]), float(reference["value"])
+    value, ref = float(reference.get("optimiser_value", objectives[name])), float(
+        reference["value"])
     sign = -1.0 if reference.get("sense") == "max" else 1.0
     pct = (100.0 * sign * (value - ref) / abs(ref)
            if math.isfinite(value) and math.isfinite(ref) and ref != 0.0 else None)

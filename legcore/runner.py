@@ -15,7 +15,7 @@ import numpy as np
 
 from legcore.earned import earned_summary
 from legcore.jobspec import JobSpec, parse_job_spec
-from legcore.optimality_gap import optimality_gap
+from legcore.optimality_gap import optimality_gap, refined_reference
 from legcore.optimizers import Progress, Result, Run, get_algorithm, termination_from_budget
 from legcore.optimizers.base import Algorithm
 from legcore.optimizers.termination import Termination
@@ -220,7 +220,8 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         start=start_summary(problem, result),
         task=problem.task,
         gap=optimality_gap(tuple(problem.objective_names), best.objectives,
-                           problem.reference_optimum()),
+                           problem.reference_optimum() or refined_reference(
+                               tuple(problem.objective_names), best.objectives, refined)),
     )
 
 

@@ -20,7 +20,7 @@ import pytest
 from scipy.interpolate import PPoly
 
 import legcore
-from legcore.optimality_gap import NO_REFERENCE, optimality_gap
+from legcore.optimality_gap import NO_REFERENCE, optimality_gap, refined_reference
 from legcore.robots import build_robot
 from legcore.runner import prepare
 from legcore.studies.path_tracking.encodings import SpeedProfile, profile_knots
@@ -177,6 +177,14 @@ def test_optimality_gap() -> None:
     assert optimality_gap(("time", "energy"), {"time": 1, "energy": 2}, ref)["reference"] is None
     assert optimality_gap(("S",), {"S": 9.0}, {**ref, "objective": "S", "value": 10.0,
                                                "sense": "max"})["pct"] == pytest.approx(10.0)
+    # without an exact solution: the optimiser's end point against its SLSQP refinement
+    rec = {"before": -9.0, "after": -9.5, "improved": True, "cv_after": 0.0, "n_evals": 300}
+    best_known = refined_reference(("S",), {"S": 9.5}, rec)  # a maximised score, F = −S
+    gap = optimality_gap(("S",), {"S": 9.5}, best_known)
+    assert gap["value"] == 9.0 and gap["reference"] == 9.5
+    assert gap["pct"] == pytest.approx(100 * 0.5 / 9.5) and gap["kind"].startswith("best known")
+    assert refined_reference(("S",), {"S": 9.0}, {**rec, "improved": False}) is None
+    assert refined_reference(("S",), {"S": 9.5}, {**rec, "cv_after": 0.1}) is None
 
 
 @pytest.mark.parametrize("kind", ["nsga2", "ga", "moead"])
