@@ -28,6 +28,19 @@ fixed seed ``baseline_seed``; Deb's feasibility rule):
   with a MOEA; the seed gives no weights — equal weights on values normalised by the robot's
   default swing is our choice).
 - ``perez2010_min_energy``: minimise the mechanical energy Σ∫|τω|dt itself.
+
+Gradient baseline (beyond the papers; issue 19):
+
+- ``gradient_min_energy``: the same minimum-energy problem — the same via points, samples,
+  spline and constraints — solved by a gradient method: SLSQP on the continuous via points with
+  batched finite differences, then a ±1-step climb on the grid
+  (:func:`legcore.optimizers.refine.refine`), from each of the coordinated motion, Pérez's GA
+  optimum and every other baseline the job lists, the best end point kept (the minimum-energy
+  swings lie in different basins: on seed 000's flat case the best start is the shortest foot
+  path, with the box the minimum-displacement GA's optimum). A multi-start local optimum, not a
+  certificate of the global one: the reference the metaheuristics' least energy is measured
+  against. Not among the defaults (it costs ~10⁴ evaluations per start): list it in
+  ``baselines``.
 """
 
 from __future__ import annotations
@@ -64,6 +77,7 @@ MULTI_TERMS = ("theta_total", "path_length", "foot_speed_max", "joint_speed_sum"
 _REF_FLOOR = {"theta_total": 1e-3, "path_length": 1e-3, "foot_speed_max": 1e-3,
               "joint_speed_sum": 1e-3, "energy": 1e-4}
 _RAISE_STEP = 0.001  # m, per retry of the min-distance construction
+_GRADIENT_ITER = 100  # SLSQP iterations of ``gradient_min_energy``, per start
 _RAISE_MAX = 50
 
 
@@ -226,7 +240,9 @@ def ga_baseline_problems(problem: SwingEnergyProblem) -> list[SwingEnergyProblem
     from legcore.studies.swing_energy.problem import BASELINES, SwingEnergyProblem
 
     criteria = {BASELINES[name][0] for name in problem.params.baselines}
-    criteria -= {"parabolic", "foot_distance"}
+    if "energy_gradient" in criteria:  # refines the minimum-energy problem's GA optimum
+        criteria |= {"energy"}
+    criteria -= {"parabolic", "foot_distance", "energy_gradient"}
     refs = dict.fromkeys(MULTI_TERMS, 1.0)
     return [SwingEnergyProblem(problem.source, problem.params, criterion=c, refs=refs)
             for c in sorted(criteria)]
@@ -252,6 +268,43 @@ def compute_baselines(problem: SwingEnergyProblem) -> dict[str, Solution]:
             sol = problem.solution(problem.encode(via), label=label)
             sol.extra["criterion"] = f"{criterion} (construction)"
             out[name] = sol
-        else:
+        elif criterion != "energy_gradient":
             out[name] = _ga_baseline(problem, criterion, refs, label)
+    for name in problem.params.baselines:  # after the others: they are its starts
+        criterion, label = BASELINES[name]
+        if criterion == "energy_gradient":
+            out[name] = _gradient_baseline(problem, refs, label, dict(out))
     return out
+
+
+def _gradient_baseline(problem: SwingEnergyProblem, refs: dict[str, float], label: str,
+                       others: dict[str, Solution]) -> Solution:
+    """``gradient_min_energy`` (module docstring): SLSQP + grid climb on the minimum-energy
+    problem from the coordinated motion, Pérez's GA optimum and each of ``others`` (the
+    job's other baselines), the best end point by the feasibility rule; cached like the GA
+    baselines."""
+    from legcore.optimizers.refine import best_index, refine
+    from legcore.studies.swing_energy.problem import SwingEnergyProblem
+
+    sub = SwingEnergyProblem(problem.source, problem.params, criterion="energy", refs=refs)
+    starts = {"the coordinated motion": sub.coordinated_x()}
+    if "perez2010_min_energy" not in others:
+        starts["perez2010_min_energy"] = np.asarray(
+            _ga_baseline(problem, "energy", refs, "").x, dtype=float)
+    starts |= {k: np.asarray(v.x, dtype=float) for k, v in others.items() if v.x is not None}
+
+    def solve() -> dict[str, Any]:
+        runs = [refine(sub, x, max_iter=_GRADIENT_ITER) for x in starts.values()]
+        i = best_index(np.array([r.f for r in runs]), np.array([r.cv for r in runs]))
+        return {"x": [float(v) for v in runs[i].x], "start": list(starts)[i],
+                "n_evals": int(sum(r.n_evals for r in runs)),
+                "ends": {k: [float(r.f), float(r.cv)] for k, r in zip(starts, runs, strict=True)}}
+
+    key = _ga_key(problem, "energy_gradient:" + ",".join(starts), refs)
+    found = cached(key, solve)
+    sol = sub.solution(np.asarray(found["x"], dtype=float), label=label)
+    sol.extra["criterion"] = "energy (gradient: SLSQP on the via points, then the grid climb)"
+    sol.extra["optimizer"] = {"kind": "slsqp", "max_iter": _GRADIENT_ITER,
+                              "best_start": found["start"], "n_evals": found["n_evals"],
+                              "ends": found["ends"]}
+    return sol

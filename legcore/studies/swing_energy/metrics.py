@@ -40,6 +40,7 @@ BASELINES: dict[str, str] = {
     "shankar_kaur2011_min_distance": "shortest foot path (Shankar & Kaur 2011)",
     "solteiro2007_multi_criteria": "multi-criteria (Solteiro 2007)",
     "perez2010_min_energy": "least energy (Pérez 2010)",
+    "gradient_min_energy": "least energy, gradient (SLSQP)",
 }
 
 #: What the study's one-block summary shows.

@@ -44,6 +44,10 @@ BASELINES: dict[str, tuple[str, str]] = {
         "multi_criteria",
         "Solteiro 2007: displacement + foot distance + foot and joint speeds + energy"),
     "perez2010_min_energy": ("energy", "Pérez 2010: minimum mechanical energy"),
+    "gradient_min_energy": (
+        "energy_gradient",
+        "minimum mechanical energy by a gradient method (SLSQP on the via points, from the "
+        "coordinated motion and every other baseline): the metaheuristics' reference"),
 }
 BaselineName = Literal[
     "calderon2008_parabolic",
@@ -51,6 +55,7 @@ BaselineName = Literal[
     "shankar_kaur2011_min_distance",
     "solteiro2007_multi_criteria",
     "perez2010_min_energy",
+    "gradient_min_energy",
 ]
 Vec3 = tuple[float, float, float]
 #: One value per joint of the leg (2 to 6 joints).
