@@ -3,8 +3,11 @@
     python benchmarks/bench_optimum.py [--quick] [--seeds N] [--cases flat obstacle tracking]
 
 Cases (each example's own problem, single objective): seed 000 flat and obstacle
-(``examples/000_swing_energy_*.yaml``, score to maximise, best 10) and seed 004
-(``examples/004_path_tracking.yaml``, cycle time T to minimise).
+(``examples/000_swing_energy_*.yaml``, score to maximise, best 10), seed 001 pan and jar
+(``examples/001_path_placement_*.yaml``, the placement objective J), seed 003
+(``examples/003_quadruped_gait.yaml``, energy per metre) and seed 004
+(``examples/004_path_tracking.yaml``, cycle time T to minimise; its exact reference, the
+physical minimum, is ``bench_time_optimal.py``'s). Seed 002 has three objectives: no single gap.
 
 1. **Gradient optimum.** Multi-start :func:`legcore.optimizers.refine.refine` (SLSQP on the
    continuous relaxation, batched central finite differences, ``max_iter`` 300) from the
@@ -46,6 +49,9 @@ ROOT = Path(__file__).resolve().parents[1]
 CASES = {
     "flat": "000_swing_energy_flat.yaml",
     "obstacle": "000_swing_energy_obstacle.yaml",
+    "pan": "001_path_placement_pan.yaml",
+    "jar": "001_path_placement_jar.yaml",
+    "gait": "003_quadruped_gait.yaml",
     "tracking": "004_path_tracking.yaml",
 }
 
