@@ -16,6 +16,8 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from legcore.studies.metric_names import display_objective
+
 __all__ = ["NO_REFERENCE", "optimality_gap", "refined_reference"]
 
 #: Why a single-objective result of a study without a reference has no gap.
@@ -24,8 +26,8 @@ NO_REFERENCE = ("no exact or gradient solution of this problem to compare with "
                 "its gap to that best-known point)")
 
 
-def refined_reference(objective_names: tuple[str, ...], objectives: Mapping[str, float],
-                      refine: Mapping[str, Any] | None) -> dict[str, Any] | None:
+def refined_reference(objective_names: tuple[str, ...], refine: Mapping[str, Any] | None
+                      ) -> dict[str, Any] | None:
     """A best-known reference from ``optimizer.refine`` (its record: ``before``/``after`` the
     minimised F, ``improved``, ``n_evals``): the optimiser's own optimum polished by SLSQP. The
     gap it gives is the *optimiser's* end point's (``value``: before refinement) to that polish;
@@ -37,10 +39,10 @@ def refined_reference(objective_names: tuple[str, ...], objectives: Mapping[str,
         return None
     if float(refine.get("cv_after") or 0.0) > 0.0:
         return None
-    shown = float(objectives[objective_names[0]])  # the reported (refined) optimum, as shown
-    sign = 1.0 if abs(shown - after) <= abs(shown + after) else -1.0  # maximised: F = −value
-    return {"objective": objective_names[0], "value": sign * float(after),
-            "optimiser_value": sign * float(before), "sense": "min" if sign > 0 else "max",
+    key, shown_after = display_objective(objective_names[0], float(after))
+    _, shown_before = display_objective(objective_names[0], float(before))
+    return {"objective": key, "value": shown_after, "optimiser_value": shown_before,
+            "sense": "min" if key == objective_names[0] else "max",
             "kind": "best known (the optimiser's optimum refined by SLSQP)",
             "method": f"{int(refine.get('n_evals') or 0)} more evaluations; the gap is the "
                       "optimiser's own end point's"}
@@ -48,7 +50,8 @@ def refined_reference(objective_names: tuple[str, ...], objectives: Mapping[str,
 
 def optimality_gap(objective_names: tuple[str, ...], objectives: Mapping[str, float],
                    reference: Mapping[str, Any] | None) -> dict[str, Any]:
-    """The gap of an optimum (``objectives``: name → value in the objective's own units) to
+    """The gap of an optimum (``objectives``: shown name → value in the objective's own units;
+    a minimised ``neg_<m>`` is shown as ``<m>``, positive) to
     the problem's ``reference`` (``{"objective", "value", "kind", "method"[, "sense",
     "optimiser_value"]}``, a minimised objective unless ``sense`` is ``"max"``; with
     ``optimiser_value`` — :func:`refined_reference` — the gap is that value's):
@@ -60,11 +63,11 @@ def optimality_gap(objective_names: tuple[str, ...], objectives: Mapping[str, fl
         return {"reference": None,
                 "reason": "several objectives: a front has no single gap (its fastest or "
                           "cheapest point is compared with the baselines)"}
-    name = objective_names[0]
-    if reference is None or reference.get("objective") != name:
+    name, _ = display_objective(objective_names[0], None)  # neg_<m> is shown as <m>
+    if reference is None or reference.get("objective") not in (name, objective_names[0]):
         return {"objective": name, "reference": None, "reason": NO_REFERENCE}
-    value, ref = float(reference.get("optimiser_value", objectives[name])), float(
-        reference["value"])
+    shown = objectives.get(name, objectives.get(objective_names[0], math.nan))
+    value, ref = float(reference.get("optimiser_value", shown)), float(reference["value"])
     sign = -1.0 if reference.get("sense") == "max" else 1.0
     pct = (100.0 * sign * (value - ref) / abs(ref)
            if math.isfinite(value) and math.isfinite(ref) and ref != 0.0 else None)

@@ -221,7 +221,7 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         task=problem.task,
         gap=optimality_gap(tuple(problem.objective_names), best.objectives,
                            problem.reference_optimum() or refined_reference(
-                               tuple(problem.objective_names), best.objectives, refined)),
+                               tuple(problem.objective_names), refined)),
     )
 
 

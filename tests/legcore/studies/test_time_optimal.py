@@ -179,12 +179,13 @@ def test_optimality_gap() -> None:
                                                "sense": "max"})["pct"] == pytest.approx(10.0)
     # without an exact solution: the optimiser's end point against its SLSQP refinement
     rec = {"before": -9.0, "after": -9.5, "improved": True, "cv_after": 0.0, "n_evals": 300}
-    best_known = refined_reference(("S",), {"S": 9.5}, rec)  # a maximised score, F = −S
-    gap = optimality_gap(("S",), {"S": 9.5}, best_known)
-    assert gap["value"] == 9.0 and gap["reference"] == 9.5
+    best_known = refined_reference(("neg_S",), rec)  # maximised S: F = −S
+    gap = optimality_gap(("neg_S",), {"S": 9.5}, best_known)
+    assert gap["objective"] == "S" and gap["value"] == 9.0 and gap["reference"] == 9.5
     assert gap["pct"] == pytest.approx(100 * 0.5 / 9.5) and gap["kind"].startswith("best known")
-    assert refined_reference(("S",), {"S": 9.0}, {**rec, "improved": False}) is None
-    assert refined_reference(("S",), {"S": 9.5}, {**rec, "cv_after": 0.1}) is None
+    assert refined_reference(("neg_S",), {**rec, "improved": False}) is None
+    assert refined_reference(("neg_S",), {**rec, "cv_after": 0.1}) is None
+    assert optimality_gap(("neg_S",), {"S": 9.5}, None)["objective"] == "S"
 
 
 @pytest.mark.parametrize("kind", ["nsga2", "ga", "moead"])
