@@ -337,7 +337,9 @@ def test_the_verdict_is_red_or_green(page: Any, stack: Stack, shots: Path) -> No
     page.screenshot(path=shots / "jobs-infeasible.png", full_page=True)
 
     page.goto(f"{stack.url}/#/job/{bad_id}")
-    page.wait_for_selector("#verdict.infeasible h2")
+    # the card is drawn from the job, then again once its result (task, gap) is loaded: wait
+    # for that last drawing before reading its colours
+    page.wait_for_selector("#verdict.infeasible #gap")
     assert page.inner_text("#verdict h2").startswith("Infeasible")
     assert _color(page, "#verdict h2") == RED
     assert _color(page, "#verdict", "borderLeftColor") == RED
@@ -355,7 +357,7 @@ def test_the_verdict_is_red_or_green(page: Any, stack: Stack, shots: Path) -> No
     page.screenshot(path=shots / "job-infeasible.png", full_page=True)
 
     page.goto(f"{stack.url}/#/job/{good_id}")
-    page.wait_for_selector("#verdict.feasible h2")
+    page.wait_for_selector("#verdict.feasible #gap")
     assert page.inner_text("#verdict h2").startswith("Feasible")
     assert _color(page, "#verdict h2") == GREEN
     assert page.locator("#violations").count() == 0
