@@ -21,9 +21,8 @@ from legcore.studies.metric_names import display_objective
 __all__ = ["NO_REFERENCE", "optimality_gap", "refined_reference"]
 
 #: Why a single-objective result of a study without a reference has no gap.
-NO_REFERENCE = ("no exact or gradient solution of this problem to compare with "
-                "(optimizer.refine: true polishes the optimum with a gradient method and gives "
-                "its gap to that best-known point)")
+NO_REFERENCE = ("no exact solution to compare with; optimizer.refine: true gives a "
+                "best-known point")
 
 
 def refined_reference(objective_names: tuple[str, ...], refine: Mapping[str, Any] | None

@@ -96,8 +96,7 @@ def reference_optimum(problem: PathTrackingProblem) -> dict[str, Any] | None:
     if problem.objective_names != ("time",) or best is None:
         return None
     return {"objective": "time", "value": best.T, "kind": "physical minimum",
-            "method": f"TOPP-RA on {best.grid.size - 1} intervals, the limits × "
-                      f"{best.scale:.6g} so that they hold on a dense resampling"}
+            "method": f"TOPP-RA, {best.grid.size - 1} intervals, limits × {best.scale:.6g}"}
 
 
 def extras(problem: PathTrackingProblem, front_X: FloatArray, front_F: FloatArray
