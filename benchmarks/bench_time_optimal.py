@@ -104,17 +104,14 @@ def main() -> None:
     print("| case | encoding | optimum T s (mean ± sd) | feasible | physical minimum T* s "
           "| T / T* mean | T / T* worst | wall s per run |")
     print("|---|---|---|---|---|---|---|---|")
-    for name, path in CASES.items():
-        if args.only and args.only not in name:
-            continue
+    cases = {name: path for name, path in CASES.items() if args.only in name}
+    for name, path in cases.items():
         for line in one(name, path, seeds):
             print(line, flush=True)
     print("\n| case | energy_time front: fastest T / T* | lowest energy J (mean ± sd) | paper's "
           "law's energy J | seeds with lowest ≤ the law's |")
     print("|---|---|---|---|---|")
-    for name, path in CASES.items():
-        if args.only and args.only not in name:
-            continue
+    for name, path in cases.items():
         print(front_span(name, path, seeds), flush=True)
 
 

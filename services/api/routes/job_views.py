@@ -20,6 +20,7 @@ from services.api.dashboard_schemas import (
     PaperOut,
     PaperValue,
     Quantity,
+    finite_or_none,
     quantities,
 )
 from services.api.deps import ApiContext, Context, CurrentKey
@@ -49,10 +50,6 @@ _POINT_ERRORS: dict[int | str, dict[str, Any]] = {
     503: {"model": ErrorOut, "description": "Still being made (one at a time): retry after "
           "`Retry-After` seconds."},
 }  # fmt: skip
-
-
-def _num(v: Any) -> float | None:
-    return float(v) if isinstance(v, int | float) and v == v and abs(v) != float("inf") else None
 
 
 def _succeeded(job: JobRecord, what: str) -> None:
@@ -112,7 +109,7 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
     n_var = max((len(p.x or []) for p in points), default=0)
     best_index = None
     if result is not None and points and isinstance(objectives, dict):
-        target = [_num((objectives.get("values") or {}).get(n)) for n in names]
+        target = [finite_or_none((objectives.get("values") or {}).get(n)) for n in names]
         if all(v is not None for v in target):
             dist = [
                 sum(
@@ -141,8 +138,8 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
         points=[
             FrontPointOut(
                 index=p.index,
-                objectives=[_num(v) for v in p.objectives or []],
-                x=[_num(v) for v in p.x or []],
+                objectives=[finite_or_none(v) for v in p.objectives or []],
+                x=[finite_or_none(v) for v in p.x or []],
                 metrics=per_point.get(p.index),
             )
             for p in points
