@@ -169,7 +169,21 @@ def main(argv: list[str]) -> int:
     else:
         print(f"run.py: unknown task {task!r}\n{__doc__}", file=sys.stderr)
         return 2
-    return subprocess.run(cmd, cwd=ROOT).returncode
+    return become(cmd)
+
+
+def become(cmd: list[str]) -> int:
+    """Replace this process by ``cmd`` (run from the repository root): a signal sent to
+    run.py (Ctrl-C, SIGTERM, kill) then reaches the command itself, which stops its own
+    service processes, instead of leaving them running behind a dead parent. Where exec is
+    not available (Windows) it runs ``cmd`` as a child and returns its exit code."""
+    os.chdir(ROOT)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if os.name == "nt":
+        return subprocess.run(cmd).returncode
+    os.execv(cmd[0], cmd)
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ import psutil
 
 from services.embedded import worker_command
 from tests.integration.stack import RedisServer, Stack
+from tests.patience import Patience
 
 #: Extra environment of every chaos process: the chaos suite is not about rate limits (ignored
 #: by a service that has none: unknown ``LEGOPT_*`` variables are ignored); faulthandler on.
@@ -193,8 +194,8 @@ class ChaosStack(Stack):
         raise KeyError(pid)
 
     def wait_ready(self, w: Worker, timeout_s: float = READY_TIMEOUT_S) -> None:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
+        patience = Patience(timeout_s)
+        while not patience.expired():
             if w.proc.poll() is not None:
                 raise AssertionError(f"worker {w.name} exited:\n{_tail(w.log)}")
             text = w.log.read_text(errors="replace") if w.log.exists() else ""
@@ -206,7 +207,7 @@ class ChaosStack(Stack):
                 self._capacity_changed()
                 return
             time.sleep(0.01)
-        raise AssertionError(f"worker {w.name} not ready in {timeout_s} s\n{_tail(w.log)}")
+        raise AssertionError(f"worker {w.name} not ready in {patience}\n{_tail(w.log)}")
 
     def pool_children(self, proc: subprocess.Popen[bytes]) -> list[psutil.Process]:
         """The live pool processes of a prefork worker (none for a solo worker)."""

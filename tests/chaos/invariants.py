@@ -23,7 +23,11 @@
    <= 1 + the number of faults that happened while the job was not terminal, + 1 after a
    fault: the dispatcher's one early re-send when the broker holds fewer messages than there
    are queued jobs (a message a live worker has taken but not yet claimed is not counted by
-   the broker, so one rescue of it may be a duplicate; a storm is still caught). Without
+   the broker, so one rescue of it may be a duplicate; a storm is still caught), + each
+   re-send the protocol allows under delay: one that came at least a lease after the job's
+   previous send while the job stayed queued (the early re-send waits a lease, the backoff
+   two or more), so a slow machine that keeps a job waiting earns it a message per lease,
+   while re-sends closer together than a lease (a storm) still break the bound. Without
    ``job_events`` the count is *estimated from the worker logs* (1 API send + each job id in a
    reaper's ``re-sent [...]`` line), reported, and held to the same bound.
 """
@@ -264,6 +268,31 @@ def faults_during(row: dict[str, Any], faults: list[Fault], now: datetime) -> in
     return sum(1 for f in faults if f.start <= end and (f.end or now) >= start)
 
 
+#: A re-send at least this fraction of a lease after the previous one is one the protocol
+#: allows (the database clock of two processes on one machine; the rest is rounding).
+SPACING_TOLERANCE = 0.95
+
+
+def paced_resends(events: list[dict[str, Any]], lease_s: float) -> Counter[str]:
+    """Per job, the re-sends the dispatch protocol allows under delay: ``dispatched`` events
+    that came at least a lease (× ``SPACING_TOLERANCE``) after the job's previous one with no
+    claim between them (the job stayed queued, its earlier message unclaimed)."""
+    allowed: Counter[str] = Counter()
+    last_send: dict[str, datetime] = {}
+    for e in sorted(events, key=lambda x: x["at"]):
+        jid, kind = e["job_id"], e["kind"]
+        if kind == "dispatched":
+            before = last_send.get(jid)
+            if before is not None and (e["at"] - before).total_seconds() >= (
+                SPACING_TOLERANCE * lease_s
+            ):
+                allowed[jid] += 1
+            last_send[jid] = e["at"]
+        elif kind != "submitted":
+            last_send.pop(jid, None)  # claimed, requeued or ended: a new queued stretch
+    return allowed
+
+
 def check_messages(
     view: DbView,
     rows: list[dict[str, Any]],
@@ -272,13 +301,16 @@ def check_messages(
     log_dir: Path,
     now: datetime,
     r: Report,
+    lease_s: float,
     mean_limit: float = 3.0,
 ) -> None:
     """Rule 6; puts ``messages_per_job_mean/max`` and their source in ``r.metrics``."""
     if not rows:
         return
+    paced: Counter[str] = Counter()
     if view.events is not None:
         counts = Counter(e["job_id"] for e in events if e["kind"] == "dispatched")
+        paced = paced_resends(events, lease_s)
         source = "job_events"
     else:
         counts = resends_from_logs(log_dir)
@@ -293,10 +325,11 @@ def check_messages(
         r.fail(f"{mean:.2f} messages per job on average ({source}), limit {mean_limit}")
     for row in rows:
         during = faults_during(row, faults, now)
-        bound = 1 + during + (1 if during else 0)
+        bound = 1 + during + (1 if during else 0) + paced[row["id"]]
         if per_job[row["id"]] > bound:
             r.fail(f"job {row['id']}: {per_job[row['id']]} messages ({source}), bound {bound} "
-                   f"(1 + faults while it was live, + 1 rescue after a fault)")  # fmt: skip
+                   f"(1 + faults while it was live, + 1 rescue after a fault, + "
+                   f"{paced[row['id']]} sent a lease or more after the one before)")  # fmt: skip
         if view.events is not None and per_job[row["id"]] == 0 and row["attempt_count"] > 0:
             r.fail(f"job {row['id']} was claimed without any 'dispatched' event")
 

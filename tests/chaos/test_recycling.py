@@ -15,12 +15,12 @@
 from __future__ import annotations
 
 import subprocess
-import time
 
 import pytest
 
 from tests.chaos.scenario import Scenario
 from tests.chaos.workload import job_spec
+from tests.patience import Patience
 
 pytestmark = [pytest.mark.integration, pytest.mark.chaos]
 
@@ -71,10 +71,10 @@ def _prefork(sc: Scenario, ids: list[str], proc: subprocess.Popen[bytes]) -> Non
 def _solo_rounds(sc: Scenario, ids: list[str], first: subprocess.Popen[bytes]) -> None:
     rounds = 0
     gap = None  # the recycled worker's exit: no worker until the next one is ready
-    deadline = time.monotonic() + sc.bound(N_JOBS, JOB_S, 1) + 30 * N_JOBS
+    patience = Patience(sc.bound(N_JOBS, JOB_S, 1) + 30 * N_JOBS)
     proc: subprocess.Popen[bytes] | None = first
     while not all(sc.status(j) == "succeeded" for j in ids):
-        assert time.monotonic() < deadline, f"jobs left after {rounds} recycled workers"
+        assert not patience.expired(), f"jobs left after {rounds} recycled workers ({patience})"
         if proc is None:
             proc = _with_env(sc, 1)
             if gap is not None:

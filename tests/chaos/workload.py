@@ -25,6 +25,7 @@ import httpx
 import yaml
 
 from tests.integration.stack import ROOT
+from tests.patience import Patience
 
 RETRY_STATUS = {429, 500, 502, 503, 504}
 
@@ -80,14 +81,15 @@ def post(
     timeout_s: float = 10.0,
 ) -> tuple[dict[str, Any], int]:
     """POST ``body`` to ``/api/v1{path}``; retries (same ``Idempotency-Key``) on connection
-    errors, 429 and 5xx until ``deadline_s``. Returns (the JSON answer, attempts)."""
+    errors, 429 and 5xx until ``deadline_s`` quiet-machine seconds (``tests.patience``).
+    Returns (the JSON answer, attempts)."""
     headers = {"X-API-Key": api_key}
     if idem_key is not None:
         headers["Idempotency-Key"] = idem_key
-    end = time.monotonic() + deadline_s
+    patience = Patience(deadline_s)
     attempts = 0
     last: str = ""
-    while time.monotonic() < end:
+    while not patience.expired():
         attempts += 1
         try:
             r = httpx.post(f"{url}/api/v1{path}", json=body, headers=headers, timeout=timeout_s)
@@ -103,7 +105,7 @@ def post(
         if r.status_code >= 400:
             raise AssertionError(f"POST {path} -> {r.status_code}: {r.text[:1000]}")
         return dict(r.json()), attempts
-    raise AssertionError(f"POST {path} did not succeed in {deadline_s} s; last: {last}")
+    raise AssertionError(f"POST {path} did not succeed in {patience}; last: {last}")
 
 
 def submit(

@@ -36,6 +36,7 @@ import pytest
 
 from services.client import Client
 from services.embedded import worker_command
+from tests.patience import Patience
 
 PG_ADMIN_URL = os.environ.get(
     "LEGOPT_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test"
@@ -195,14 +196,16 @@ class RedisServer:
              "--appendonly", "no", "--dir", str(self.workdir)],
             stdout=subprocess.DEVNULL,
         )  # fmt: skip
-        deadline = time.monotonic() + 10
-        while time.monotonic() < deadline:
+        patience = Patience(10)
+        while not patience.expired():
+            if self.proc.poll() is not None:
+                raise RuntimeError(f"redis-server exited with {self.proc.returncode}")
             try:
                 with socket.create_connection(("127.0.0.1", self.port), timeout=0.2):
                     return
             except OSError:
                 time.sleep(0.05)
-        raise RuntimeError("redis-server did not start")
+        raise RuntimeError(f"redis-server did not start in {patience}")
 
     def stop(self) -> None:
         if self.proc is not None and self.proc.poll() is None:
@@ -270,8 +273,8 @@ class Stack:
              "--port", str(self.port), "--log-level", "warning", "--workers", str(workers)],
             "api.log",
         )  # fmt: skip
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
+        patience = Patience(60)
+        while not patience.expired():
             if self.api.poll() is not None:
                 raise RuntimeError(f"API exited: {(self.logs / 'api.log').read_text()[-2000:]}")
             try:
@@ -280,7 +283,7 @@ class Stack:
             except httpx.HTTPError:
                 pass
             time.sleep(0.2)
-        raise RuntimeError("API did not start in 60 s")
+        raise RuntimeError(f"API did not start in {patience}")
 
     def stop_api(self) -> None:
         if self.api is not None and self.api.poll() is None:
@@ -330,15 +333,18 @@ class Stack:
         return Client(self.url, self.key, timeout=30)
 
     def wait_for(self, job_id: str, pred: Any, timeout_s: float = 120.0) -> dict[str, Any]:
-        """Poll job ``job_id`` until ``pred(job)``; fails with the logs after ``timeout_s``."""
-        deadline = time.monotonic() + timeout_s
+        """Poll job ``job_id`` until ``pred(job)``; fails with the logs after ``timeout_s``
+        quiet-machine seconds (``tests.patience``)."""
+        patience = Patience(timeout_s)
         with self.client() as c:
             while True:
                 job = c.job(job_id)
                 if pred(job):
                     return job
-                if time.monotonic() > deadline:
-                    raise AssertionError(f"timeout waiting for {job_id}: {job}\n{self.log_tail()}")
+                if patience.expired():
+                    raise AssertionError(
+                        f"timeout ({patience}) waiting for {job_id}: {job}\n{self.log_tail()}"
+                    )
                 time.sleep(0.2)
 
 

@@ -16,6 +16,7 @@ from services.store.session import make_engine, session_scope
 from services.store.tables import GENERATIONS, JOBS, PARETO_POINTS, RESULTS
 from services.worker.rerun_blueprint import read_entities
 from tests.integration.stack import ROOT, Stack
+from tests.patience import Patience
 
 pytestmark = pytest.mark.integration
 
@@ -235,9 +236,9 @@ def test_replay_web_serves_the_viewer(stack: Stack, tmp_path: Path) -> None:
         env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
     )  # fmt: skip
     try:
-        deadline = time.monotonic() + 60
+        patience = Patience(60)
         status = None
-        while time.monotonic() < deadline and status != 200:
+        while not patience.expired() and status != 200:
             if proc.poll() is not None:
                 raise AssertionError(proc.stdout.read().decode() if proc.stdout else "exited")
             try:

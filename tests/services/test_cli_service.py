@@ -18,6 +18,7 @@ from typer.testing import CliRunner
 
 from services.cli import app
 from tests.integration.stack import Stack, embedded_stack
+from tests.patience import Patience
 
 ROOT = Path(__file__).resolve().parents[2]
 runner = CliRunner()
@@ -108,9 +109,9 @@ def test_cancel_a_job_and_a_sweep_by_prefix(stack: Stack, tmp_path: Path) -> Non
     assert code == 0 and f"sweep {sweep_id}" in out and "seed" in out
     code, out = cli(stack, "cancel", sweep_id[:8])
     assert code == 0 and f"sweep {sweep_id[:8]}: cancelling 2 unfinished jobs" in out, out
-    deadline = time.monotonic() + 60
+    patience = Patience(60)
     with stack.client() as c:
-        while time.monotonic() < deadline:
+        while not patience.expired():
             jobs = c.jobs(sweep_id=sweep_id)["items"]
             if all(j["status"] == "cancelled" for j in jobs):
                 break

@@ -28,6 +28,7 @@ import yaml
 from services.client import TERMINAL, Client
 from services.supervisor import ChildSpec, Supervisor, describe_exit
 from tests.integration.stack import ROOT, free_port
+from tests.patience import Patience
 
 START_TIMEOUT_S = 120.0  # the service answers /health and runs all its workers
 GONE_TIMEOUT_S = 30.0  # every descendant has exited after a stop or a kill
@@ -36,14 +37,14 @@ JOB_TIMEOUT_S = 240.0
 
 def _wait(pred: Callable[[], Any], timeout_s: float, what: str, log: Path | None = None) -> Any:
     """Poll ``pred`` every 0.2 s until it returns a true value; fail naming ``what``."""
-    deadline = time.monotonic() + timeout_s
+    patience = Patience(timeout_s)
     while True:
         value = pred()
         if value:
             return value
-        if time.monotonic() > deadline:
+        if patience.expired():
             tail = log.read_text(errors="replace")[-4000:] if log and log.exists() else ""
-            raise AssertionError(f"timeout ({timeout_s:.0f} s) waiting for {what}\n{tail}")
+            raise AssertionError(f"timeout ({patience}) waiting for {what}\n{tail}")
         time.sleep(0.2)
 
 
@@ -84,16 +85,19 @@ def _alive(procs: list[psutil.Process]) -> list[psutil.Process]:
 
 
 class Service:
-    """One ``python -m services.cli ARGS`` process tree (serve or demo) with its log."""
+    """One ``python -m services.cli ARGS`` process tree (serve or demo) with its log;
+    ``launcher``: another command prefix (``python3 run.py legopt``)."""
 
-    def __init__(self, tmp: Path, args: list[str], log_name: str) -> None:
+    def __init__(
+        self, tmp: Path, args: list[str], log_name: str, launcher: list[str] | None = None
+    ) -> None:
         self.tmp = tmp
         self.env = _env(tmp)
         self.log = tmp / log_name
         self.seen: dict[int, psutil.Process] = {}
         with self.log.open("ab") as out:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "services.cli", *args],
+                [*(launcher or [sys.executable, "-m", "services.cli"]), *args],
                 env=self.env, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT,
             )  # fmt: skip
         self.root = psutil.Process(self.proc.pid)
@@ -142,11 +146,12 @@ class Serve(Service):
         api_workers: int = 1,
         log_name: str = "serve.log",
         stop_timeout_s: float = 10.0,
+        launcher: list[str] | None = None,
     ) -> None:
         self.port = free_port()
         args = ["serve", "--workers", str(workers), "--api-workers", str(api_workers)]
         args += ["--stop-timeout", str(stop_timeout_s), "--port", str(self.port)]
-        super().__init__(tmp, args, log_name)
+        super().__init__(tmp, args, log_name, launcher)
         self.url = f"http://127.0.0.1:{self.port}"
         self.n_workers = workers
 
@@ -286,6 +291,22 @@ def test_ctrl_c_stops_serve_and_its_workers(tmp_path: Path, services: list[Servi
     serve.wait_ready()
     assert len(serve.workers()) == 2
     assert serve.stop(signal.SIGINT) == 0, serve.log.read_text()[-3000:]
+    serve.assert_all_gone()
+
+
+@pytest.mark.integration
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_run_py_serve_stopped_leaves_no_process(
+    tmp_path: Path, services: list[Service], sig: int
+) -> None:
+    """`python3 run.py legopt serve`, the documented start, stopped by a signal to run.py (kill,
+    Ctrl-C): the signal reaches serve itself (run.py becomes it), which stops every process."""
+    launcher = [sys.executable, str(ROOT / "run.py"), "legopt"]
+    serve = Serve(tmp_path, workers=1, log_name="run-py-serve.log", launcher=launcher)
+    services.append(serve)
+    serve.wait_ready()
+    assert serve.workers(), "serve runs its worker"
+    assert serve.stop(sig) == 0, serve.log.read_text()[-3000:]
     serve.assert_all_gone()
 
 
