@@ -144,11 +144,40 @@ def run_tests(py: str, args: list[str]) -> int:
     n = str(max(1, min(os.cpu_count() or 1, 4)))
     code = 0
     for marker in ("not integration", "integration"):
-        print(f"run.py: pytest -m {marker!r} on {n} processes", flush=True)
+        burn = _cpu_burn() if marker == "integration" else 0
+        print(f"run.py: pytest -m {marker!r} on {n} processes"
+              + (f", {burn} CPU burners beside them" if burn else ""), flush=True)  # fmt: skip
         cmd = [py, "-m", "pytest", "-m", marker, "-n", n, "--dist", "loadfile", *args]
-        rc = subprocess.run(cmd, cwd=ROOT).returncode
+        burners = [_burner() for _ in range(burn)]
+        try:
+            rc = subprocess.run(cmd, cwd=ROOT).returncode
+        finally:
+            for b in burners:
+                b.kill()
+                b.wait()
         code = code or (0 if rc == 5 else rc)  # 5: nothing collected
     return code
+
+
+#: A busy loop that ends when its parent (run.py) is gone, however that ended.
+_BURN = ("import os\nparent = os.getppid()\nwhile os.getppid() == parent:\n"
+         "    for _ in range(200000):\n        pass\n")
+
+
+def _cpu_burn() -> int:
+    """Busy processes to run beside the real-process tests: ``LEGOPT_TEST_CPU_BURN`` per core
+    (0 by default). CI sets it to prove the suite fails only when the software is wrong, not
+    when a shared machine is busy (``LEGOPT_TEST_CPU_BURN=2``: the CPU oversubscribed 3×)."""
+    try:
+        per_core = float(os.environ.get("LEGOPT_TEST_CPU_BURN", "0") or 0)
+    except ValueError:
+        print("run.py: LEGOPT_TEST_CPU_BURN must be a number of burners per core", file=sys.stderr)
+        raise SystemExit(2) from None
+    return max(0, round(per_core * (os.cpu_count() or 1)))
+
+
+def _burner() -> subprocess.Popen[bytes]:
+    return subprocess.Popen([sys.executable, "-c", _BURN], stdin=subprocess.DEVNULL)
 
 
 def main(argv: list[str]) -> int:

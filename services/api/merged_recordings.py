@@ -4,7 +4,13 @@ Merging reads and writes Rerun files through ``rerun-sdk``, whose recording stre
 threads and native memory; done in the API process, every download grew it (issue 8). The merge
 therefore runs in a short-lived child process, and its output is cached under
 ``<cache_dir>/merged/`` by a content key (the member recordings' SHA-256 and their names), so a
-repeated download is a file read. The cache keeps the newest :data:`KEEP` files.
+repeated download is a file read. The cache keeps the most recently used files up to
+:data:`KEEP_BYTES` in all (and always the newest).
+
+Bounds (issue 22): each child holds the member recordings in memory (~120 MB for a few jobs),
+so at most :data:`MERGE_WORKERS` merges run at once per API process, at most
+:data:`MAX_PENDING` distinct merges wait or run (beyond that: 429 with ``Retry-After``), and
+parallel requests for the same merge share one child (``services.api.bounded_work``).
 """
 
 from __future__ import annotations
@@ -17,10 +23,20 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-#: Merged files kept in the cache (oldest removed first).
-KEEP = 32
+from services.api.bounded_work import BoundedWork
+
+#: Bytes of merged files kept in the cache (least recently used removed first).
+KEEP_BYTES = 1 << 30
 #: Seconds a merge may take before it is abandoned.
 TIMEOUT_S = 300.0
+#: Merge children running at once per API process.
+MERGE_WORKERS = 2
+#: Distinct merges waiting or running at once per API process (beyond: 429).
+MAX_PENDING = 6
+
+_work = BoundedWork(
+    "legopt-merge", workers=MERGE_WORKERS, max_pending=MAX_PENDING, wait_s=TIMEOUT_S + 30
+)
 
 _CHILD = (
     "import json, sys\n"
@@ -40,16 +56,26 @@ def merge_key(names: Sequence[str], digests: Sequence[str]) -> str:
 def merged_recording(
     paths: Sequence[Path], names: Sequence[str], digests: Sequence[str], cache_dir: Path
 ) -> Path:
-    """Path of the merged recording of ``paths`` (made now in a child process unless cached).
+    """Path of the merged recording of ``paths`` (made now in a child process unless cached;
+    bounded and shared as the module docstring says).
 
     Raises:
         RuntimeError: the merge failed or timed out (its error output in the message).
+        fastapi.HTTPException: 429 (too many merges queued) or 503 (still running).
     """
     folder = cache_dir / "merged"
     folder.mkdir(parents=True, exist_ok=True)
-    out = folder / f"{merge_key(names, digests)}.rrd"
+    key = merge_key(names, digests)
+    out = folder / f"{key}.rrd"
     if out.is_file():
         os.utime(out)  # recently used: kept by the pruning below
+        return out
+    return _work.run(key, lambda: _merge(paths, names, out), f"the merged recording {key[:8]}")
+
+
+def _merge(paths: Sequence[Path], names: Sequence[str], out: Path) -> Path:
+    """Merge in a child process into ``out`` (kept if another request made it meanwhile)."""
+    if out.is_file():
         return out
     arg = json.dumps({"paths": [str(p) for p in paths], "out": str(out), "names": list(names)})
     try:
@@ -62,17 +88,22 @@ def merged_recording(
     if done.returncode != 0 or not out.is_file():
         tail = (done.stderr or "").strip().splitlines()[-1:] or [f"exit {done.returncode}"]
         raise RuntimeError(tail[0])
-    _prune(folder)
+    _prune(out.parent)
     return out
 
 
-def _prune(folder: Path) -> None:
-    """Remove all but the :data:`KEEP` most recently used merged files."""
+def _prune(folder: Path, keep_bytes: int = KEEP_BYTES) -> None:
+    """Remove the least recently used merged files beyond ``keep_bytes`` in all (the newest
+    one always stays)."""
     stamped = []
     for p in folder.glob("*.rrd"):
         try:
-            stamped.append((p.stat().st_mtime, p))
+            st = p.stat()
         except FileNotFoundError:  # pruned meanwhile by another API process
             continue
-    for _, old in sorted(stamped, reverse=True)[KEEP:]:
-        old.unlink(missing_ok=True)
+        stamped.append((st.st_mtime, st.st_size, p))
+    total = 0
+    for i, (_, size, p) in enumerate(sorted(stamped, key=lambda t: t[0], reverse=True)):
+        total += size
+        if i > 0 and total > keep_bytes:
+            p.unlink(missing_ok=True)

@@ -29,14 +29,13 @@ import tempfile
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
-from concurrent.futures import TimeoutError as FutureTimeout
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 from fastapi import HTTPException, status
 
+from services.api.bounded_work import BoundedWork
 from services.api.deps import ApiContext
 from services.store import output_queries as oq
 from services.store import repository as repo
@@ -52,10 +51,9 @@ MOTION_CACHE_SIZE = 64
 #: Generations whose fronts a point recording replays (the most recent ones beyond this).
 MAX_FRONT_GENERATIONS = 2000
 
-_executor: ThreadPoolExecutor | None = None
-_pending: dict[tuple[str, str], Future[Any]] = {}
-_lock = threading.Lock()
+_work = BoundedWork("legopt-point", workers=1, wait_s=WAIT_S)
 _motions: OrderedDict[tuple[str, str], dict[str, Any]] = OrderedDict()
+_lock = threading.Lock()
 
 
 def point_kind(k: int) -> str:
@@ -66,29 +64,7 @@ def point_kind(k: int) -> str:
 def _run(key: tuple[str, str], work: Callable[[], T]) -> T:
     """Run ``work`` on the process's point thread (shared by identical concurrent requests);
     503 with Retry-After when it takes longer than ``WAIT_S``."""
-    global _executor
-    with _lock:
-        if _executor is None:
-            _executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="legopt-point")
-        future = _pending.get(key)
-        if future is None:
-            future = _executor.submit(work)
-            _pending[key] = future
-            future.add_done_callback(lambda _f: _forget(key))
-    try:
-        return future.result(timeout=WAIT_S)
-    except FutureTimeout:
-        raise HTTPException(
-            status.HTTP_503_SERVICE_UNAVAILABLE,
-            f"{key[1]} of job {key[0]} is still being made (one at a time per API process); "
-            "retry in a few seconds",
-            headers={"Retry-After": "5"},
-        ) from None
-
-
-def _forget(key: tuple[str, str]) -> None:
-    with _lock:
-        _pending.pop(key, None)
+    return _work.run(key, work, f"{key[1]} of job {key[0]}")
 
 
 def _point_error(exc: Exception) -> HTTPException:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import os
 import socket
 import subprocess
 import time
@@ -24,6 +26,7 @@ from services.worker import rerun_blueprint as B
 from services.worker import rerun_merge as M
 from services.worker import rerun_replay as RP
 from services.worker import rerun_writer as W
+from tests.patience import Patience
 from tests.recording_fixtures import arm_motion, fake_result
 
 SCENE = {
@@ -371,9 +374,71 @@ def test_merged_recording_is_made_in_a_child_once_and_cached(
     monkeypatch.undo()
     with pytest.raises(RuntimeError, match="not found"):
         M.merged_recording([a, tmp_path / "gone.rrd"], ["1_a", "2_b"], ["da", "dx"], cache)
-    monkeypatch.setattr(M, "KEEP", 0)
-    M._prune(cache / "merged")
-    assert not list((cache / "merged").glob("*.rrd"))
+    (cache / "merged" / "old.rrd").write_bytes(b"x")
+    os.utime(cache / "merged" / "old.rrd", (1, 1))
+    M._prune(cache / "merged", keep_bytes=0)
+    assert list((cache / "merged").glob("*.rrd")) == [out]  # the newest always stays
+
+
+def test_merges_run_bounded_shared_and_refused_beyond_the_queue(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """12 parallel merge requests (10 distinct, 2 repeats): at most MERGE_WORKERS children at
+    once, the repeats share a child, distinct merges beyond MAX_PENDING get 429 + Retry-After
+    at once, and every accepted one ends with its file."""
+    import threading
+
+    from fastapi import HTTPException
+
+    from services.api import merged_recordings as M
+
+    release = threading.Event()
+    lock = threading.Lock()
+    running, peak, children = [0], [0], [0]
+
+    def fake_child(cmd: list[str], **_: object) -> object:
+        with lock:
+            running[0] += 1
+            children[0] += 1
+            peak[0] = max(peak[0], running[0])
+        assert release.wait(60)
+        Path(json.loads(cmd[-1])["out"]).write_bytes(b"merged")
+        with lock:
+            running[0] -= 1
+        return M.subprocess.CompletedProcess(cmd, 0, "", "")
+
+    monkeypatch.setattr(M.subprocess, "run", fake_child)
+    cache, a = tmp_path / "cache", tmp_path / "a.rrd"
+    outcomes: list[tuple[int, object]] = []
+
+    def request(i: int) -> None:
+        try:
+            outcomes.append((i, M.merged_recording([a], [f"1_{i}"], [f"d{i}"], cache)))
+        except HTTPException as exc:
+            outcomes.append((i, exc))
+
+    def refused() -> list[tuple[int, HTTPException]]:
+        return [(i, o) for i, o in outcomes if isinstance(o, HTTPException)]
+
+    threads = [threading.Thread(target=request, args=(i,)) for i in range(10)]
+    for t in threads:
+        t.start()
+    patience = Patience(60)
+    while len(refused()) < 10 - M.MAX_PENDING or M._work.pending < M.MAX_PENDING:
+        assert not patience.expired(), (outcomes, M._work.pending)
+        release.wait(0.01)
+    admitted = sorted(set(range(10)) - {i for i, _ in refused()})
+    repeats = [threading.Thread(target=request, args=(i,)) for i in admitted[:2]]
+    for t in repeats:
+        t.start()  # the same merges: they join the pending ones (no new child, no 429)
+    release.set()
+    for t in threads + repeats:
+        t.join(60)
+    assert len(refused()) == 10 - M.MAX_PENDING
+    assert all(e.status_code == 429 and (e.headers or {})["Retry-After"] for _, e in refused())
+    files = [o for _, o in outcomes if isinstance(o, Path)]
+    assert len(files) == M.MAX_PENDING + 2 and all(f.read_bytes() == b"merged" for f in files)
+    assert children[0] == M.MAX_PENDING and peak[0] <= M.MERGE_WORKERS
 
 
 def views(container: object) -> list[tuple[str, str, str]]:
