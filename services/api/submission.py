@@ -4,8 +4,11 @@
   connection dropped, the API restarted) sends the same key and gets the resource the first
   request created, not a second one. The same key with a different body is a 422.
 - Quotas: jobs queued or running, worker CPU seconds per hour and stored bytes per API key
-  (``services.store.quotas``); over a quota the request is refused with 429 and a message that
-  says what is used, the limit, and what to do.
+  (``services.store.quotas``); over a quota the request is refused with 429, a message that
+  says what is used, the limit, and what to do, and ``Retry-After`` (whole seconds: 30 for
+  active jobs, until the next UTC hour for CPU seconds, 60 for storage; see the constants of
+  ``services.store.quotas``). The check locks the key until the caller's transaction ends, so
+  the jobs must be stored in that same transaction (``ApiContext.write()``).
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from fastapi import Header, HTTPException, status
 from sqlalchemy.orm import Session
 
 from services.api.errors import invalid
+from services.api.rate_limit import retry_after_header
 from services.store.idempotency import MAX_KEY_LENGTH, find_idempotent, remember_idempotent
 from services.store.quotas import quota_refusal
 from services.store.records import ApiKeyRecord, IdempotencyRecord
@@ -99,10 +103,16 @@ def _replay_or_mismatch(record: IdempotencyRecord, fingerprint: str, kind: str) 
 def check_quota(
     session: Session, key: ApiKeyRecord, settings: Settings, *, new_jobs: int, new_bytes: int
 ) -> None:
-    """429 when the key may not add ``new_jobs`` jobs storing ``new_bytes`` bytes."""
-    reason = quota_refusal(session, key, settings, new_jobs=new_jobs, new_bytes=new_bytes)
-    if reason is not None:
-        raise HTTPException(status.HTTP_429_TOO_MANY_REQUESTS, f"quota exceeded: {reason}")
+    """429 with ``Retry-After`` (seconds) when the key may not add ``new_jobs`` jobs storing
+    ``new_bytes`` bytes. Holds the key's quota lock until ``session``'s transaction ends: store
+    the jobs in it."""
+    refusal = quota_refusal(session, key, settings, new_jobs=new_jobs, new_bytes=new_bytes)
+    if refusal is not None:
+        raise HTTPException(
+            status.HTTP_429_TOO_MANY_REQUESTS,
+            f"quota exceeded: {refusal.message}",
+            headers={"Retry-After": retry_after_header(refusal.retry_after_s)},
+        )
 
 
 def replay_headers() -> dict[str, Any]:

@@ -3,11 +3,23 @@
 Workers add the CPU time of each job as it runs (``add_cpu_seconds``, in the transaction that
 writes its progress); the API checks a key's usage before it stores new jobs
 (``quota_refusal``), and refuses with a message saying what is used, what the limit is and
-what to do. A key's own limits (``api_keys.max_*``) override the settings' defaults.
+what to do, and how many seconds to wait before trying again (``QuotaRefusal``). A key's own
+limits (``api_keys.max_*``) override the settings' defaults.
+
+The check and the insert are atomic when both run in ONE transaction: ``quota_refusal`` first
+locks the key (``lock_key``), so concurrent submissions of one key queue up, and each counts
+the jobs and bytes the previous ones committed. On PostgreSQL the lock is the key's
+``api_keys`` row taken ``FOR NO KEY UPDATE`` until commit or rollback (it does not block the
+foreign-key checks of rows that refer to the key, e.g. a worker's usage row, nor other keys);
+the default READ COMMITTED isolation gives every statement after it a fresh snapshot. On SQLite
+the clause is not emitted: the API's write transaction holds the database's write lock from
+``BEGIN IMMEDIATE`` (``session_scope(immediate=True)``), and a deferred transaction whose read
+went stale fails at its first write instead of storing past the limit.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
@@ -18,7 +30,15 @@ from services.store.lifecycle import insert_ignoring_duplicates
 from services.store.records import ApiKeyRecord
 from services.store.repository import now_utc, rowcount
 from services.store.settings import Settings
-from services.store.tables import ARTIFACTS, JOBS, KEY_USAGE, JobStatus
+from services.store.tables import API_KEYS, ARTIFACTS, JOBS, KEY_USAGE, JobStatus
+
+#: ``Retry-After`` of an active-jobs refusal (s): a slot frees when one of the key's jobs ends,
+#: which the API cannot foresee; jobs run for tens of seconds to minutes, so half a minute
+#: between attempts finds a free slot soon without hammering the API.
+ACTIVE_JOBS_RETRY_AFTER_S = 30
+#: ``Retry-After`` of a storage refusal (s): bytes are freed only by deleting jobs
+#: (``DELETE /jobs/{id}``), so an automatic retry waits a minute for the client to do that.
+STORAGE_RETRY_AFTER_S = 60
 
 
 def hour_of(now: datetime) -> datetime:
@@ -100,6 +120,25 @@ def usage(session: Session, owner_key_id: str, *, now: datetime | None = None) -
     return Usage(int(active), float(cpu or 0.0), int(artifacts) + int(specs))
 
 
+@dataclass(frozen=True, slots=True)
+class QuotaRefusal:
+    """Why a submission is refused (``message``: what is used, the limit, what to do) and how
+    long to wait before trying again (``retry_after_s``: whole seconds, >= 1; the API's
+    ``Retry-After``)."""
+
+    message: str
+    retry_after_s: int
+
+
+def lock_key(session: Session, owner_key_id: str) -> None:
+    """Hold ``owner_key_id``'s quota lock until the transaction of ``session`` ends (see the
+    module docstring): a concurrent caller blocks here until this transaction commits or rolls
+    back. A no-op statement on SQLite, whose write transactions are serialised already."""
+    session.execute(
+        select(API_KEYS.c.id).where(API_KEYS.c.id == owner_key_id).with_for_update(key_share=True)
+    )
+
+
 def quota_refusal(
     session: Session,
     key: ApiKeyRecord,
@@ -108,33 +147,53 @@ def quota_refusal(
     new_jobs: int,
     new_bytes: int,
     now: datetime | None = None,
-) -> str | None:
-    """Why ``key`` may not add ``new_jobs`` jobs of ``new_bytes`` stored bytes, or None."""
+) -> QuotaRefusal | None:
+    """Why ``key`` may not add ``new_jobs`` jobs of ``new_bytes`` stored bytes, or None.
+
+    Locks the key first (``lock_key``): store the jobs in the same transaction, so that no
+    concurrent submission of the key counts before they are committed.
+    ``retry_after_s`` is ``ACTIVE_JOBS_RETRY_AFTER_S`` (active jobs), the seconds until the
+    next UTC hour (CPU seconds per hour) or ``STORAGE_RETRY_AFTER_S`` (stored bytes).
+    """
     now = now_utc(now)
+    lock_key(session, key.id)
     used = usage(session, key.id, now=now)
     max_active = key.max_active_jobs or settings.quota_active_jobs
     max_cpu = key.max_cpu_seconds_per_hour or settings.quota_cpu_seconds_per_hour
     max_bytes = key.max_storage_bytes or settings.quota_storage_bytes
     if used.active_jobs + new_jobs > max_active:
-        return (
+        return QuotaRefusal(
             f"this API key has {used.active_jobs} jobs queued or running and asks for "
             f"{new_jobs} more; its limit is {max_active} at a time: wait for some to finish "
-            "or cancel them (POST /jobs/{id}/cancel)"
+            "or cancel them (POST /jobs/{id}/cancel)",
+            ACTIVE_JOBS_RETRY_AFTER_S,
         )
     if used.cpu_seconds_this_hour >= max_cpu:
         reset = hour_of(now) + timedelta(hours=1)
-        return (
+        return QuotaRefusal(
             f"this API key's jobs used {used.cpu_seconds_this_hour:.0f} worker CPU seconds "
             f"this hour; its limit is {max_cpu:.0f} per hour: submit again after "
-            f"{reset.strftime('%H:%M')} UTC"
+            f"{reset.strftime('%H:%M')} UTC",
+            max(1, math.ceil((reset - now).total_seconds())),
         )
     if used.stored_bytes + new_bytes > max_bytes:
-        return (
+        return QuotaRefusal(
             f"this API key stores {used.stored_bytes} bytes and the request adds {new_bytes}; "
             f"its limit is {max_bytes} bytes: delete finished jobs you no longer need "
-            "(DELETE /jobs/{id})"
+            "(DELETE /jobs/{id})",
+            STORAGE_RETRY_AFTER_S,
         )
     return None
 
 
-__all__ = ["Usage", "add_cpu_seconds", "hour_of", "quota_refusal", "usage"]
+__all__ = [
+    "ACTIVE_JOBS_RETRY_AFTER_S",
+    "STORAGE_RETRY_AFTER_S",
+    "QuotaRefusal",
+    "Usage",
+    "add_cpu_seconds",
+    "hour_of",
+    "lock_key",
+    "quota_refusal",
+    "usage",
+]
