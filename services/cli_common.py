@@ -39,8 +39,26 @@ app = typer.Typer(
 )
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            print(f"legopt {version('legopt')}")
+        except PackageNotFoundError:  # a source tree that was never installed
+            print("legopt (not installed: run python3 run.py legopt --version)")
+        raise typer.Exit()
+
+
 @app.callback()
-def _private_files() -> None:
+def _private_files(
+    _version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_print_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
     """Everything legopt writes (database, artifacts, keys, broker) is private: umask 077."""
     from services.embedded import restrict_umask
 

@@ -67,7 +67,8 @@ def _has_dashboard(url: str) -> bool:
 def _next_steps(ids: list[str], data_dir: Path, dashboard: bool) -> Table:
     """Where to look next: the commands, with the demo's own job ids."""
     first = short(ids[0]) if ids else "JOB"
-    title = f"next — the jobs stay in {data_dir}; with [bold]legopt serve[/] running:"
+    title = (f"next — the demo's service has stopped; the jobs stay in {data_dir}. "
+             f"Start [bold]legopt serve[/] (port {SERVE_PORT}), then:")  # fmt: skip
     t = Table(box=None, show_header=False, padding=(0, 2), title_justify="left", title=title)
     t.add_column(style="bold", no_wrap=True)
     t.add_column()
@@ -135,6 +136,8 @@ def demo(
     )  # fmt: skip
     try:
         _wait_healthy(url, server, log_path)
+        if _has_dashboard(url):
+            console.print(f"the dashboard is live at {url}/ while the demo runs")
         with Client.from_env(url) as c:
             jobs: list[dict[str, Any]] = []
             for doc in docs:

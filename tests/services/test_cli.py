@@ -113,3 +113,10 @@ def test_keys_create_admin_list_and_revoke(tmp_path: Path, monkeypatch: object) 
     finally:
         get_settings.cache_clear()
         reset_engine()
+
+
+def test_version_prints_the_installed_version() -> None:
+    from importlib.metadata import version
+
+    res = runner.invoke(app, ["--version"])
+    assert res.exit_code == 0 and res.output.strip() == f"legopt {version('legopt')}"
