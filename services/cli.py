@@ -130,11 +130,12 @@ def run(
 
 def _record(result: Any, path: Path, fronts: dict[int, Any] | None = None) -> None:
     try:
+        from services.store.settings import get_settings
         from services.worker.rerun_writer import write_recording
     except ImportError:
         return
     try:
-        write_recording(result, path, fronts=fronts)
+        write_recording(result, path, fronts=fronts, mesh_roots=get_settings().mesh_root_dirs)
     except Exception as exc:  # a recording failure never fails the run
         err_console.print(f"[yellow]warning:[/] recording failed: {type(exc).__name__}: {exc}")
         return

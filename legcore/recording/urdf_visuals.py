@@ -37,13 +37,17 @@ def _floats(text: str | None, n: int, default: float = 0.0) -> list[float]:
     return vals + [default] * (n - len(vals)) if len(vals) < n else vals[:n]
 
 
+#: Mesh names listed per reason in the summary note (the rest counted).
+MAX_LISTED = 20
+
+
 def _urdf_mesh(
-    shape: Any, link: str, k_link: int, mesh_roots: MeshRoots, notes: list[str]
+    shape: Any, mesh_roots: MeshRoots, refused: dict[str, list[str]]
 ) -> dict[str, Any] | None:
     """The PoseTrack fields of a ``<mesh>`` visual, its file read only inside ``mesh_roots``
-    (none: no file access, DESIGN §5); a mesh not read is noted and left to the link capsule."""
+    (none: no file access, DESIGN §5); a mesh not read is added to ``refused`` (reason ->
+    names) and left to the link capsule."""
     name = shape.get("filename", "")
-    drawn = "the link is drawn as a capsule" if k_link > 0 else "it is not drawn"
     try:
         if mesh_roots and os.path.splitext(name)[1].lower() not in MESH_SUFFIXES:
             raise ResourceRefused(
@@ -51,10 +55,23 @@ def _urdf_mesh(
             )
         path, data = read_resource(name, mesh_roots, max_bytes=MAX_MESH_BYTES)
     except ResourceRefused as exc:
-        notes.append(f"URDF mesh {name!r} of link {link!r} not read: {exc.reason}; {drawn}")
+        refused.setdefault(exc.reason, []).append(name)
         return None
     scale = _floats(shape.get("scale"), 3, 1.0)
     return {"geometry": "mesh", "mesh": str(path), "mesh_data": data, "half_size": tuple(scale)}
+
+
+def mesh_notes(refused: dict[str, list[str]]) -> list[str]:
+    """One note per reason a mesh was not read (not one per mesh): how many, which (the first
+    :data:`MAX_LISTED` names), and what is drawn instead."""
+    out = []
+    for reason, names in refused.items():
+        listed = ", ".join(repr(n) for n in names[:MAX_LISTED])
+        more = f" and {len(names) - MAX_LISTED} more" if len(names) > MAX_LISTED else ""
+        what = "URDF mesh" if len(names) == 1 else f"{len(names)} URDF meshes"
+        out.append(f"{what} not read ({reason}): {listed}{more}; their links are drawn as "
+                   "capsules")  # fmt: skip
+    return out
 
 
 def _urdf_visuals(
@@ -85,6 +102,7 @@ def _urdf_visuals(
     for k, fid in enumerate(robot.link_frames, start=1):
         index[model.frames[fid].name] = k
     out: list[PoseTrack] = []
+    refused: dict[str, list[str]] = {}
     for link in ET.fromstring(text).iter("link"):
         k_link = index.get(link.get("name", ""))
         if k_link is None:
@@ -111,11 +129,12 @@ def _urdf_visuals(
                 r = float(shape.get("radius", "0"))
                 kw = {"geometry": "capsule", "length": 0.0, "radius": r}
             elif shape.tag == "mesh":
-                mesh = _urdf_mesh(shape, link.get("name", "?"), k_link, mesh_roots, notes)
+                mesh = _urdf_mesh(shape, mesh_roots, refused)
                 if mesh is None:
                     continue
                 kw = mesh
             else:
                 continue
             out.append(PoseTrack(path, None, p[None], R[None], color=C_LINK, **kw))
+    notes.extend(mesh_notes(refused))
     return out

@@ -52,6 +52,12 @@ class Settings(BaseModel):
         default=Path(),
         description="Directory of the local artifact store; default <data_dir>/artifacts.",
     )
+    mesh_roots: str = Field(
+        default="",
+        description="Extra folders URDF package:// meshes may be read from (separated by "
+        "os.pathsep), beside the installed robot-description packages "
+        "(legcore.mesh_packages); a path a user wrote is never opened.",
+    )
 
     # Limits that stop a single request from taking the cluster.
     max_population: int = Field(default=2_000, gt=0, description="Max population per job.")
@@ -174,6 +180,14 @@ class Settings(BaseModel):
         if package is None or not os.access(package, os.W_OK):  # numba's default: in-tree
             env["NUMBA_CACHE_DIR"] = str((self.cache_dir / "numba").absolute())
         return env
+
+    @property
+    def mesh_root_dirs(self) -> tuple[Path, ...]:
+        """Every folder a recording may read URDF meshes from: the installed packages' and
+        ``mesh_roots`` (``legcore.mesh_packages.mesh_roots``)."""
+        from legcore.mesh_packages import mesh_roots
+
+        return mesh_roots([p for p in self.mesh_roots.split(os.pathsep) if p])
 
     @property
     def is_sqlite(self) -> bool:

@@ -408,8 +408,8 @@ def _write_recording(
     fronts: dict[int, Any] | None = None,
 ) -> ArtifactIn | str:
     """Write the job's Rerun recording; a failure becomes a warning, never a failed job, and
-    what the recording could not draw (e.g. a mesh of an uploaded robot, which is never read)
-    is appended to ``warnings``."""
+    what the recording could not draw (e.g. a mesh outside the installed robot-description
+    packages and the configured roots, which is never read) is appended to ``warnings``."""
     try:
         from services.worker.rerun_writer import write_recording
     except ImportError as exc:
@@ -417,7 +417,10 @@ def _write_recording(
     try:
         with tempfile.TemporaryDirectory(prefix="legopt-rrd-") as tmp:
             path = Path(tmp) / "recording.rrd"
-            notes = write_recording(result, path, recording_id=job_id, fronts=fronts)
+            notes = write_recording(
+                result, path, recording_id=job_id, fronts=fronts,
+                mesh_roots=get_settings().mesh_root_dirs,
+            )  # fmt: skip
             warnings.extend(f"recording: {n}" for n in notes or [])
             return ArtifactIn("recording", *store.put(job_id, "recording", path, attempt=attempt))
     except Exception as exc:

@@ -149,6 +149,7 @@ def write_point_recording(
     job's baselines, ``history`` (the stored per-generation rows) and ``fronts`` (per-generation
     objective vectors) or the final front ``pareto`` (``[{x, objectives}]``); ``title`` names
     it. Returns the writer's notes (what it could not draw)."""
+    from services.store.settings import get_settings
     from services.worker.rerun_writer import write_recording
 
     prepared = decoded.prepared
@@ -164,4 +165,7 @@ def write_point_recording(
         optimizer={},
         objective_names=tuple(problem.objective_names),
     )
-    return write_recording(result, path, recording_id=recording_id, fronts=fronts)
+    return write_recording(
+        result, path, recording_id=recording_id, fronts=fronts,
+        mesh_roots=get_settings().mesh_root_dirs,
+    )  # fmt: skip

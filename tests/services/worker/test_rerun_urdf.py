@@ -86,3 +86,45 @@ def test_missing_mesh_is_noted(robot_and_motion) -> None:  # type: ignore[no-unt
     assert cyl.geometry == "capsule" and cyl.length == pytest.approx(0.3)
     # the capsule starts half a length before the visual origin along the cylinder axis (x here)
     np.testing.assert_allclose(cyl.translation[0], [0.0, 0.0, 0.0], atol=1e-6)
+
+
+def test_many_missing_meshes_are_one_note_per_reason(tmp_path: Path) -> None:
+    """Thirteen meshes not read give one note (how many, which), not thirteen."""
+    names = [f"package://nowhere/m{i}.stl" for i in range(13)]
+    text = urdf(names[0]).replace(
+        '<visual><geometry><mesh filename="package://nowhere/x.stl"/></geometry></visual>',
+        "".join(f'<visual><geometry><mesh filename="{n}"/></geometry></visual>' for n in names[1:]),
+    )
+    robot = build_robot({"kind": "urdf", "name": "vis", "urdf": text})
+    t = np.linspace(0, 1, 10)
+    q = np.stack([np.sin(t), np.cos(t)], axis=1)
+    motion = Motion(t=t, q=q, joint_names=("j1", "j2"), tool=fk(robot, q)[:, :3, 3], robot="vis")
+    notes = W.write_recording(fake_result(motion, m=1, generations=2), tmp_path / "r.rrd",
+                              robot=robot, mesh_roots=[tmp_path])  # fmt: skip
+    mesh_lines = [n for n in notes if "URDF mesh" in n]
+    assert len(mesh_lines) == 1, notes
+    assert "13 URDF meshes not read (no such file under the mesh roots)" in mesh_lines[0]
+    assert all(repr(n) in mesh_lines[0] for n in names)
+
+
+def test_an_example_robot_data_leg_is_drawn_with_its_installed_meshes(tmp_path: Path) -> None:
+    """A Solo-12 leg as uploaded (its URDF text only): the worker's roots — the installed
+    example-robot-data package — resolve its package:// STL meshes, which the recording embeds."""
+    from services.store.settings import Settings
+    from tests.robot_files import ERD_URDF, require_erd
+
+    text = (require_erd() / ERD_URDF["solo12"]).read_text()
+    robot = build_robot({"kind": "urdf", "name": "solo", "urdf": text, "legs": "auto",
+                         "leg": "FL"})  # fmt: skip
+    roots = Settings.from_env({}).mesh_root_dirs
+    assert roots and all(r.is_dir() for r in roots)
+    t = np.linspace(0, 1, 10)
+    q = np.tile(robot.home, (10, 1)) + 0.1 * t[:, None]
+    names = tuple(list(robot.model.names)[1:])
+    motion = Motion(t=t, q=q, joint_names=names, tool=fk(robot, q)[:, :3, 3], robot="solo")
+    path = tmp_path / "solo.rrd"
+    notes = W.write_recording(fake_result(motion, m=1, generations=2), path, robot=robot,
+                              mesh_roots=roots)  # fmt: skip
+    meshes = [e for e, a in B.read_entities(path).items() if "rerun.archetypes.Asset3D" in a]
+    assert len(meshes) >= 3, (meshes, notes)  # hip, upper leg, lower leg at least
+    assert not [n for n in notes if "URDF mesh" in n and "solo12" in n], notes
