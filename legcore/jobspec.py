@@ -14,7 +14,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictInt,
+    TypeAdapter,
+    ValidationError,
+    model_validator,
+)
 
 from legcore.optimizers import get_algorithm
 from legcore.robots.spec import RobotSpec
@@ -45,7 +53,7 @@ class OptimizerSpec(_Strict):
     kind: Literal["ga", "hka", "moead", "nsga2"]
     params: dict[str, Any] = Field(default_factory=dict)
     refine: bool = False
-    refine_max_iter: int = Field(default=100, ge=1, le=1000)
+    refine_max_iter: StrictInt = Field(default=100, ge=1, le=1000)
 
     @model_validator(mode="after")
     def _params_valid(self) -> OptimizerSpec:
@@ -61,11 +69,11 @@ class Budget(_Strict):
     generations). ``ftol``: stop when the best objective improved by less than ``ftol`` over the
     last ``window`` generations (seed 001's stall rule)."""
 
-    generations: int | None = Field(default=None, ge=1, le=100_000)
-    evaluations: int | None = Field(default=None, ge=1, le=10**9)
+    generations: StrictInt | None = Field(default=None, ge=1, le=100_000)
+    evaluations: StrictInt | None = Field(default=None, ge=1, le=10**9)
     wall_time_s: float | None = Field(default=None, gt=0, le=7 * 24 * 3600)
     ftol: float | None = Field(default=None, gt=0)
-    window: int = Field(default=10, ge=1, le=10_000)
+    window: StrictInt = Field(default=10, ge=1, le=10_000)
 
 
 def _problem_union() -> Any:
@@ -100,7 +108,7 @@ class JobSpec(_Strict):
     else:
         problem: ProblemSpec
     optimizer: OptimizerSpec | None = None
-    seed: int = Field(default=0, ge=0, le=2**32 - 1)
+    seed: StrictInt = Field(default=0, ge=0, le=2**32 - 1)
     budget: Budget = Field(default_factory=Budget)
     record: bool = True
 

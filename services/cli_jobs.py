@@ -32,7 +32,7 @@ from services.display import (
     summary_block,
 )
 
-__all__ = ["follow", "print_job_result", "short"]
+__all__ = ["follow", "print_job_result", "short", "sweep_cancelled_text"]
 
 JobArg = Annotated[str, typer.Argument(metavar="JOB", help="job id or an unambiguous prefix")]
 
@@ -130,27 +130,31 @@ def cancel(
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:
-    """Cancel jobs, or every unfinished job of a sweep (a running job stops after its current
-    generation)."""
+    """Cancel jobs, or every unfinished job of a sweep in one request (a running job stops
+    after its current generation)."""
     with client(url, key) as c:
         targets = [resolve_id(c, i, field="ID", collections=("jobs", "sweeps")) for i in ids]
         for col, full in targets:
-            job_ids = [full]
             if col == "sweeps":
-                page = api_call(c.jobs, sweep_id=full, status=["queued", "running"], limit=1000)
-                job_ids = [j["id"] for j in page["items"]]
-                console.print(f"sweep {short(full)}: cancelling {len(job_ids)} unfinished jobs")
-            for jid in job_ids:
-                job = _cancel_one(c, jid)
-                state = job["status"]
-                if job.get("_finished"):
-                    console.print(
-                        f"job {short(jid)}: already finished ({state}), nothing to cancel"
-                    )
-                    continue
-                if state not in ("cancelled",) and job.get("cancel_requested"):
-                    state = "cancel requested (it stops after its current generation)"
-                console.print(f"job {short(jid)}: {state}")
+                console.print(sweep_cancelled_text(full, api_call(c.cancel_sweep, full)))
+                continue
+            job = _cancel_one(c, full)
+            state = job["status"]
+            if job.get("_finished"):
+                console.print(f"job {short(full)}: already finished ({state}), nothing to cancel")
+                continue
+            if state not in ("cancelled",) and job.get("cancel_requested"):
+                state = "cancel requested (it stops after its current generation)"
+            console.print(f"job {short(full)}: {state}")
+
+
+def sweep_cancelled_text(sweep_id: str, answer: dict[str, Any]) -> str:
+    """What ``POST /sweeps/{id}/cancel`` did, in a line."""
+    done = [f"{answer.get('cancelled', 0)} cancelled"]
+    if answer.get("stopping"):
+        done.append(f"{answer['stopping']} stopping after their current generation")
+    done.append(f"{answer.get('already_finished', 0)} already finished")
+    return f"sweep {short(sweep_id)}: " + ", ".join(done)
 
 
 def _cancel_or_none(c: Any, job_id: str) -> dict[str, Any] | None:

@@ -170,6 +170,11 @@ class Client:
     def cancel(self, job_id: str) -> dict[str, Any]:
         return dict(self.post(f"/jobs/{job_id}/cancel"))
 
+    def cancel_sweep(self, sweep_id: str) -> dict[str, Any]:
+        """Cancel every unfinished job of a sweep in one request: the sweep's counts and how
+        many jobs were ``cancelled``, are ``stopping`` or had ``already_finished``."""
+        return dict(self.post(f"/sweeps/{sweep_id}/cancel"))
+
     def sweep(self, doc: dict[str, Any], *, idempotency_key: str | None = None) -> dict[str, Any]:
         """Create a sweep; retried safely on connection errors (see :meth:`create`)."""
         return dict(self.create("/sweeps", doc, idempotency_key=idempotency_key))

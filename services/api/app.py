@@ -23,9 +23,10 @@ from services.api.deps import API_KEY_HEADER, ApiContext, Enqueue, current_key, 
 from services.api.errors import install_error_handlers
 from services.api.json_guard import JsonGuardMiddleware
 from services.api.rate_limit import RateLimiter
-from services.api.routes import health, jobs, keys, robots, studies, sweeps
+from services.api.routes import health, jobs, keys, robots, studies, sweep_cancel, sweeps
 from services.api.routes.dashboard_routers import DASHBOARD_ROUTERS
 from services.api.schemas import ErrorOut
+from services.api.security_headers import SecurityHeadersMiddleware
 from services.api.sweeps import MAX_SWEEP_JOBS
 from services.store.settings import Settings, get_settings
 from services.web import mount_dashboard
@@ -40,7 +41,8 @@ Every endpoint except `/health`, `/ready` and these docs needs the `{API_KEY_HEA
 Resources belong to the key that created them; another key gets 404.
 Listings take `limit` and `offset` and answer `{{items, total, limit, offset}}`.
 Validation errors are 422 `{{"detail": [{{"loc": [...], "msg": ..., "type": ...}}]}}` with the
-location of the offending field; other errors are `{{"detail": "message"}}`.
+location of the offending field (every 422 has this shape); other errors are
+`{{"detail": "message"}}`. Every response carries `X-Content-Type-Options: nosniff`.
 """
 
 
@@ -89,6 +91,7 @@ def create_app(
     app.state.context = ctx
     app.add_middleware(JsonGuardMiddleware)  # depth / NaN checks, inside the size limit
     app.add_middleware(BodySizeLimitMiddleware, max_bytes=max_body_bytes)
+    app.add_middleware(SecurityHeadersMiddleware)  # outermost: every response, 413s included
     install_error_handlers(app)
 
     app.include_router(health.router, prefix=API_PREFIX)
@@ -100,6 +103,7 @@ def create_app(
     protected.include_router(robots.router)
     protected.include_router(jobs.router)
     protected.include_router(sweeps.router)
+    protected.include_router(sweep_cancel.router)
     protected.include_router(keys.router)
     protected.include_router(studies.router)
     for router in DASHBOARD_ROUTERS:

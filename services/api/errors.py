@@ -3,9 +3,11 @@
 Two shapes only, both FastAPI's:
 
 - validation errors (422): ``{"detail": [{"loc": [...], "msg": "...", "type": "..."}]}``; the
-  location starts with ``"body"``, ``"query"`` or ``"path"`` and then names the field, e.g.
-  ``["body", "robot", "joints", 1, "inertia"]``;
-- every other error: ``{"detail": "message"}`` (401, 404, 409, 413, 503, 500).
+  location starts with ``"body"``, ``"query"``, ``"header"`` or ``"path"`` and then names the
+  field, e.g. ``["body", "robot", "joints", 1, "inertia"]``. Every 422 has this shape: an
+  ``HTTPException(422, "message")`` is answered as one error of that shape (``loc`` empty,
+  ``type`` ``value_error``) — raise :func:`invalid` instead, which names the field;
+- every other error: ``{"detail": "message"}`` (401, 403, 404, 409, 413, 429, 503, 500).
 
 legcore reports a bad spec either as a pydantic ``ValidationError`` or as a ``ValueError`` whose
 message starts with the field (``"urdf: not well-formed XML"``); :func:`from_pydantic` and
@@ -23,10 +25,13 @@ from collections.abc import Iterable, Sequence
 from typing import Any
 
 from fastapi import FastAPI, HTTPException, Request, status
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 from pydantic import ValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from services.api.security_headers import SECURITY_HEADERS
 from services.store.errors import (
     ArtifactError,
     ConflictError,
@@ -36,6 +41,10 @@ from services.store.errors import (
 log = logging.getLogger("legopt.api")
 
 Loc = tuple[str | int, ...]
+
+#: The OpenAPI schema of a 422 body (FastAPI's ``HTTPValidationError``), for a route that
+#: documents its own 422s.
+VALIDATION_ERROR_SCHEMA = {"$ref": "#/components/schemas/HTTPValidationError"}
 
 #: How many errors one response lists at most (a sweep of 1000 bad jobs stays readable).
 MAX_ERRORS = 20
@@ -131,8 +140,8 @@ def from_value_error(
 # --------------------------------------------------------------------------- handlers
 
 
-def _detail(status_code: int, message: str) -> JSONResponse:
-    return JSONResponse(status_code=status_code, content={"detail": message})
+def _detail(status_code: int, message: str, headers: dict[str, str] | None = None) -> JSONResponse:
+    return JSONResponse(status_code=status_code, content={"detail": message}, headers=headers)
 
 
 def _text(value: Any) -> str:
@@ -182,6 +191,22 @@ async def _request_invalid(_request: Request, exc: Exception) -> JSONResponse:
     )
 
 
+async def _http_error(request: Request, exc: Exception) -> Response:
+    """FastAPI's answer to an ``HTTPException``, except that a 422 whose detail is a message
+    (not a list of errors) is answered in the validation errors' shape, like every 422."""
+    assert isinstance(exc, StarletteHTTPException)
+    if exc.status_code == status.HTTP_422_UNPROCESSABLE_CONTENT and not isinstance(
+        exc.detail, list
+    ):
+        errors = [field_error([], str(exc.detail))]
+        return JSONResponse(
+            status_code=exc.status_code,
+            content={"detail": public_errors(errors)},
+            headers=exc.headers,
+        )
+    return await http_exception_handler(request, exc)
+
+
 async def _not_found(_request: Request, exc: Exception) -> JSONResponse:
     return _detail(status.HTTP_404_NOT_FOUND, str(exc) or "not found")
 
@@ -197,16 +222,19 @@ async def _artifact(_request: Request, exc: Exception) -> JSONResponse:
 
 async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
     log.exception("unhandled error on %s %s", request.method, request.url.path, exc_info=exc)
-    return _detail(
+    return _detail(  # sent from outside every middleware: its own security headers
         status.HTTP_500_INTERNAL_SERVER_ERROR,
         "internal server error (logged); please report it with the time of the request",
+        headers=dict(SECURITY_HEADERS),
     )
 
 
 def install_error_handlers(app: FastAPI) -> None:
-    """422 for request validation errors (JSON-safe, see ``public_errors``); store errors to
-    404 / 409 / 500 and anything unexpected to a logged 500."""
+    """422 for request validation errors (JSON-safe, see ``public_errors``) and for an
+    ``HTTPException(422, ...)`` (the same shape); store errors to 404 / 409 / 500 and anything
+    unexpected to a logged 500."""
     app.add_exception_handler(RequestValidationError, _request_invalid)
+    app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(NotFoundError, _not_found)
     app.add_exception_handler(ConflictError, _conflict)
     app.add_exception_handler(ArtifactError, _artifact)
@@ -220,6 +248,7 @@ def not_found(what: str, ident: str) -> HTTPException:
 
 __all__ = [
     "MAX_ERRORS",
+    "VALIDATION_ERROR_SCHEMA",
     "clean_pydantic_errors",
     "field_error",
     "from_pydantic",

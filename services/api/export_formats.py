@@ -3,6 +3,13 @@
 A table is its column names and an iterable of rows (tuples in column order). CSV and JSON are
 written as they are read (a 10^5-job list streams page by page); Parquet (pyarrow, which
 rerun-sdk already needs) is built in memory, column types inferred (numbers, strings, times).
+
+Every CSV cell goes through :func:`csv_cell`: text that a spreadsheet would read as a formula
+(starting with ``= + - @``, a tab or a carriage return: a job's name, a tag, a robot's or a
+swept value, all the tenant's) gets a leading ``'`` (OWASP's advice against CSV injection);
+numbers stay numbers (``-1.5`` written from a float is not text). Rows end in CRLF (RFC 4180),
+so the ``csv`` module quotes a cell holding a separator, a quote, a line feed or a lone carriage
+return (which a spreadsheet could otherwise take for the start of a new row).
 """
 
 from __future__ import annotations
@@ -14,7 +21,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from datetime import datetime
 from typing import Any, Literal
 
-__all__ = ["FORMATS", "MEDIA_TYPES", "ExportFormat", "encode", "filename"]
+__all__ = ["FORMATS", "MEDIA_TYPES", "ExportFormat", "csv_cell", "encode", "filename"]
 
 ExportFormat = Literal["csv", "json", "parquet"]
 FORMATS: tuple[str, ...] = ("csv", "json", "parquet")
@@ -23,6 +30,8 @@ MEDIA_TYPES = {
     "json": "application/json",
     "parquet": "application/vnd.apache.parquet",
 }
+#: What a spreadsheet reads as the start of a formula (OWASP, CSV injection).
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
 
 def _cell(value: Any) -> Any:
@@ -35,13 +44,26 @@ def _cell(value: Any) -> Any:
     return value
 
 
+def csv_cell(value: Any) -> Any:
+    """``value`` as a CSV cell: empty for None, times in ISO 8601, lists and mappings as JSON,
+    and text starting like a formula (:data:`FORMULA_STARTS`) behind a ``'`` so that a
+    spreadsheet shows it as text. Numbers (and booleans) are returned as they are, whatever
+    their sign: only text is the tenant's."""
+    value = None if value is None else _cell(value)
+    if value is None:  # also NaN
+        return ""
+    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
+        return "'" + value
+    return value
+
+
 def _csv(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
     buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(columns)
+    writer = csv.writer(buf, lineterminator="\r\n")
+    writer.writerow([csv_cell(c) for c in columns])
     n = 0
     for row in rows:
-        writer.writerow(["" if v is None else _cell(v) for v in row])
+        writer.writerow([csv_cell(v) for v in row])
         n += 1
         if n % 500 == 0:
             yield buf.getvalue().encode()

@@ -12,7 +12,15 @@ from datetime import datetime
 from functools import cache
 from typing import Annotated, Any, Generic, Literal, TypeVar
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, WithJsonSchema, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictInt,
+    TypeAdapter,
+    WithJsonSchema,
+    model_validator,
+)
 
 from legcore.jobspec import JobSpec
 from legcore.robots import RobotSpec
@@ -514,7 +522,7 @@ class SweepCreate(_In):
     entries: list[dict[str, Any]] = Field(
         default_factory=list, alias="list", description="Explicit override sets (path -> value)."
     )
-    seeds: list[int] = Field(default_factory=list, description="Seeds to repeat each point with.")
+    seeds: list[StrictInt] = Field(default_factory=list, description="Each point once per seed.")
 
 
 SweepState = Literal["empty", "queued", "running", "finished"]

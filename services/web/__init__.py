@@ -33,17 +33,30 @@ _NO_CACHE = {"Cache-Control": "no-cache"}
 #: usage analytics to its makers): the browser refuses any other origin.
 _SELF_ONLY = (
     "default-src 'self'; connect-src 'self'; img-src 'self' data: blob:; "
-    "style-src 'self' 'unsafe-inline'; worker-src 'self' blob:; frame-src 'self'; "
-    "frame-ancestors 'self'; base-uri 'none'; form-action 'self'; "
+    "worker-src 'self' blob:; frame-src 'self'; frame-ancestors 'self'; base-uri 'none'; "
+    "form-action 'self'; "
 )
-_VIEWER_SCRIPTS = "script-src 'self' 'unsafe-inline' 'unsafe-eval' 'wasm-unsafe-eval'"
+#: An empty inline ``<style>`` element (the SHA-256 of the empty string) and nothing else
+#: inline: plotly.js creates one empty ``<style>`` per page and per plot and adds its rules
+#: through the CSSOM (``insertRule``, which a policy does not restrict); the dashboard's own
+#: styles are in ``style.css`` and its scripts set element styles through the CSSOM too, never
+#: as ``style=""`` attributes. Neither plotly.js (the gl3d bundle: its 2-D and 3-D scatter
+#: traces) nor the dashboard's modules evaluate strings, so no ``'unsafe-eval'``.
+_EMPTY_STYLE = "'sha256-47DEQpj8HBSa+/TImW+5JCeuQeRkm5NMpJWZG3hSuFU='"
 DASHBOARD_HEADERS = {
     **_NO_CACHE,
-    "Content-Security-Policy": _SELF_ONLY + "script-src 'self' 'unsafe-eval'",
+    "Content-Security-Policy": _SELF_ONLY + f"style-src 'self' {_EMPTY_STYLE}; script-src 'self'",
 }
+#: The Rerun viewer's page: its scripts are files; ``'wasm-unsafe-eval'`` lets it compile its
+#: WebAssembly (the viewer itself), nothing more.
+_VIEWER_SCRIPTS = "style-src 'self'; script-src 'self' 'wasm-unsafe-eval'"
 VIEWER_HEADERS = {**_NO_CACHE, "Content-Security-Policy": _SELF_ONLY + _VIEWER_SCRIPTS}
-#: Swagger UI: FastAPI's page starts the bundle from an inline script.
-DOCS_HEADERS = {"Content-Security-Policy": _SELF_ONLY + "script-src 'self' 'unsafe-inline'"}
+#: Swagger UI: FastAPI's page starts the bundle from an inline script, and the bundle styles
+#: its elements with ``style=""`` attributes.
+DOCS_HEADERS = {
+    "Content-Security-Policy": _SELF_ONLY
+    + "style-src 'self' 'unsafe-inline'; script-src 'self' 'unsafe-inline'"
+}
 
 
 def viewer_app(settings: Settings) -> Starlette:

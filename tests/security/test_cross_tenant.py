@@ -97,6 +97,10 @@ def tenants(db_settings: Settings) -> Iterator[Tenants]:
         assert r.status_code == 202, r.text
         sweep_id, job_ids = r.json()["id"], r.json()["job_ids"]
         finish_like_a_worker(ctx, job_ids[0], recording=_real_recording(data))
+        # a queued job of no sweep (Alice's own calls of every route cancel her sweep's jobs)
+        r = client.post(f"{API}/jobs", json=sweep["base"], headers=alice)
+        assert r.status_code == 202, r.text
+        job_ids.append(r.json()["id"])
         ids = {"robot_id": robot_id, "job_id": job_ids[0], "sweep_id": sweep_id}
         ids["key_id"] = alice_key_id
         ids["k"] = "0"
@@ -238,10 +242,12 @@ def test_alice_references_are_unknown_to_bob(tenants: Tenants) -> None:
 
 
 def test_bob_cannot_cancel_or_delete_alice_jobs(tenants: Tenants) -> None:
-    queued = tenants.alice_job_ids[1]
+    queued = tenants.alice_job_ids[-1]  # of no sweep: still queued
+    sweep = tenants.ids["sweep_id"]
     for method, url in (
         ("POST", f"{API}/jobs/{queued}/cancel"),
         ("DELETE", f"{API}/jobs/{queued}"),
+        ("POST", f"{API}/sweeps/{sweep}/cancel"),
     ):
         r = tenants.client.request(method, url, headers=tenants.bob)
         assert r.status_code == 404, f"{method} {url} as Bob: {r.status_code} {r.text[:200]}"

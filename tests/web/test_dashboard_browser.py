@@ -75,6 +75,9 @@ TIMEOUT_MS = 60_000
 VIEWER_CALLS_HOME = {"tel.rerun.io", "api.github.com"}
 #: Reported to the console by every document of the page (an init script): a request the
 #: page's Content-Security-Policy refused never reaches the "request" event.
+#: (``page.wait_for_function`` predicates are arrow functions, not expressions: Playwright
+#: evaluates an expression again with ``eval`` in the page at each poll, which the dashboard's
+#: policy refuses — no ``'unsafe-eval'`` — while a function is compiled once, by DevTools.)
 CSP_REPORTER = """document.addEventListener("securitypolicyviolation", (e) =>
   console.error(`legopt-csp-violation ${e.violatedDirective} ${e.blockedURI}`));"""
 
@@ -147,11 +150,11 @@ def test_jobs_front_point_replay_and_csv(
     page.click("#submit-example")
     queued = page.wait_for_selector("#new-job p:text('queued')").inner_text()
     ids["page"] = queued.split()[1]  # "job {id} queued"
-    page.wait_for_function("document.querySelectorAll('#jobs-table tbody tr').length == 2")
+    page.wait_for_function("() => document.querySelectorAll('#jobs-table tbody tr').length == 2")
     # live progress: the table polls until both are finished
     page.wait_for_selector(f"tr[data-job='{job_id}'][data-status='succeeded']", timeout=120_000)
     page.wait_for_function(
-        "[...document.querySelectorAll('#jobs-table tbody tr')]"
+        "() => [...document.querySelectorAll('#jobs-table tbody tr')]"
         ".every(r => r.dataset.status === 'succeeded')",
         timeout=120_000,
     )
@@ -191,7 +194,7 @@ def test_jobs_front_point_replay_and_csv(
     page.wait_for_selector("#joint-plot .scatterlayer .trace")
     page.click("#motion button[data-signal=tau]")
     page.wait_for_function(
-        "(document.querySelector('#joint-plot .g-ytitle') || {}).textContent"
+        "() => (document.querySelector('#joint-plot .g-ytitle') || {}).textContent"
         " === 'joint torque [N·m]'"
     )
     # a point of the plot (the first one that is not the selected point): plotly picks the
@@ -199,12 +202,12 @@ def test_jobs_front_point_replay_and_csv(
     points = page.locator("#front-plot .scatterlayer .trace").first.locator(".point")
     points.nth(0 if k != "0" else 1).click(force=True)
     page.wait_for_function(
-        f"(() => {{ const r = document.querySelector('#front-table tr.selected');"
-        f" return r && r.dataset.point !== '{k}'; }})()"
+        f"() => {{ const r = document.querySelector('#front-table tr.selected');"
+        f" return r && r.dataset.point !== '{k}'; }}"
     )
     picked = page.locator("#front-table tr.selected").get_attribute("data-point")
     page.wait_for_function(
-        f"document.querySelector('#motion h2').textContent.includes('front point {picked}')"
+        f"() => document.querySelector('#motion h2').textContent.includes('front point {picked}')"
     )
     viewer = page.frame_locator("iframe.viewer")
     viewer.locator("canvas#viewer-canvas").wait_for(state="attached")
@@ -253,7 +256,7 @@ def test_cancel_and_rerun_from_the_jobs_table(page: Any, stack: Stack, ids: dict
     old_id = ids["page"]
     page.click(f"tr[data-job='{old_id}'][data-status='succeeded'] button[data-action=rerun]")
     page.wait_for_function(
-        f"location.hash.startsWith('#/job/') && location.hash !== '#/job/{old_id}'"
+        f"() => location.hash.startsWith('#/job/') && location.hash !== '#/job/{old_id}'"
     )
     new_id = page.evaluate("location.hash").removeprefix("#/job/")
     with stack.client() as c:
@@ -270,10 +273,10 @@ def test_cancel_and_rerun_from_the_jobs_table(page: Any, stack: Stack, ids: dict
     page.goto(f"{stack.url}/#/job/{other}")
     page.click("button[data-action=rerun]")
     page.wait_for_function(
-        f"location.hash.startsWith('#/job/') && location.hash !== '#/job/{other}'"
+        f"() => location.hash.startsWith('#/job/') && location.hash !== '#/job/{other}'"
     )
     rerun_id = page.evaluate("location.hash").removeprefix("#/job/")
-    page.wait_for_function(f"document.body.innerText.includes('{rerun_id}')")  # its page drawn
+    page.wait_for_function(f"() => document.body.innerText.includes('{rerun_id}')")  # drawn
     page.click("button[data-action=cancel]")
     stack.wait_for(rerun_id, lambda j: j["status"] == "cancelled")
     with stack.client() as c:
@@ -435,8 +438,8 @@ def test_nothing_leaves_this_server(page: Any, stack: Stack) -> None:
     assert not foreign, foreign
     assert not page.legopt_csp, page.legopt_csp  # nothing was even tried and refused
 
-    # the headers: /viewer/ allows nothing but this server (and inline/eval/wasm scripts, which
-    # the viewer's boot needs); the dashboard not even inline scripts
+    # the headers: /viewer/ allows nothing but this server's scripts and styles (and compiling
+    # the viewer's WebAssembly); the dashboard not even that, only plotly's empty <style>
     viewer_csp = page.legopt_documents["/viewer/"]["content-security-policy"]
     for directive in (
         "default-src 'self'",
@@ -447,10 +450,14 @@ def test_nothing_leaves_this_server(page: Any, stack: Stack) -> None:
         "base-uri 'none'",
     ):
         assert directive in viewer_csp, viewer_csp
-    assert "script-src 'self' 'unsafe-inline' 'unsafe-eval' 'wasm-unsafe-eval'" in viewer_csp
+    assert "script-src 'self' 'wasm-unsafe-eval'" in viewer_csp, viewer_csp
     dashboard_csp = page.legopt_documents["/"]["content-security-policy"]
     assert "default-src 'self'" in dashboard_csp and "connect-src 'self'" in dashboard_csp
-    assert "unsafe-inline" not in dashboard_csp.split("script-src")[1], dashboard_csp
+    assert "script-src 'self'" in dashboard_csp and "style-src 'self' 'sha256-" in dashboard_csp
+    for csp in (viewer_csp, dashboard_csp):  # no inline script or style, no eval
+        assert "'unsafe-inline'" not in csp and "'unsafe-eval'" not in csp, csp
+    for path in ("/", "/viewer/", "/api/v1/docs"):
+        assert page.legopt_documents[path]["x-content-type-options"] == "nosniff", path
     docs_csp = page.legopt_documents["/api/v1/docs"]["content-security-policy"]  # Swagger UI
     assert "default-src 'self'" in docs_csp and "connect-src 'self'" in docs_csp, docs_csp
 

@@ -13,7 +13,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, model_validator
+from pydantic import Field, StrictInt, model_validator
 
 from legcore.studies.hexapod_workspace.robot import HexapodGeometry
 from legcore.studies.study import StudyParams
@@ -195,7 +195,7 @@ class Params(StudyParams):
                                         description=_derived("pose grid step in yaw, rad"))
     knee: Literal["up", "down", "either"] = "up"
     duration: float = Field(default=1.0, gt=0.0, le=3600.0)
-    motion_samples: int = Field(default=51, ge=2, le=5000)
+    motion_samples: StrictInt = Field(default=51, ge=2, le=5000)
     hv_ref_point: tuple[float, float, float] | None = Field(
         default=None, description=_derived("hypervolume reference (f1 rad, f2 rad, f3 m)"))
     straight_step: float = Field(default=math.radians(5.0), gt=0.0, le=math.pi / 2)

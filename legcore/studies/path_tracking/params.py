@@ -16,7 +16,7 @@ import math
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 
 from legcore.studies.path_tracking.joints import ToolOrientation
 from legcore.studies.study import StudyParams
@@ -179,7 +179,7 @@ class Params(StudyParams):
     rest: tuple[Finite, ...] | None = Field(default=None, min_length=1, max_length=12)
     objective: Literal["time", "energy", "energy_time"] = "time"
     speeds: Literal["per_segment", "single", "profile"] = "per_segment"
-    profile_intervals: int = Field(default=256, ge=4, le=1000)
+    profile_intervals: StrictInt = Field(default=256, ge=4, le=1000)
     ramp: Literal["linear", "cubic"] = "linear"
     V: Finite | None = Field(default=None, gt=0.0)
     t_a: Finite = Field(default=SEED_T_A, gt=0.0)
@@ -188,8 +188,8 @@ class Params(StudyParams):
     ramp_bounds: tuple[Finite, Finite] = (0.005, 5.0)
     T_max: Finite | None = Field(default=None, gt=0.0)
     qdd_max: Positive | tuple[Positive, ...] | Literal["robot"] | None = "robot"
-    n_samples: int = Field(default=400, ge=20, le=20_000)
-    limit_check: int = Field(default=10, ge=1, le=50)
+    n_samples: StrictInt = Field(default=400, ge=20, le=20_000)
+    limit_check: StrictInt = Field(default=10, ge=1, le=50)
 
     @model_validator(mode="after")
     def _check(self) -> Params:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, StrictInt, field_validator, model_validator
 
 from legcore.studies.quadruped_gait.cycle import SwingShape
 from legcore.studies.study import StudyParams
@@ -16,7 +16,7 @@ __all__ = ["ROBOT_RELATIVE", "Pair", "Params"]
 Pair = tuple[float, float]
 #: One value per joint of a leg (2 or 3 joints).
 PerJoint = Annotated[tuple[float, ...], Field(min_length=2, max_length=3)]
-PerJointSign = Annotated[tuple[int, ...], Field(min_length=2, max_length=3)]
+PerJointSign = Annotated[tuple[StrictInt, ...], Field(min_length=2, max_length=3)]
 
 #: The scalar and pair fields derived from the robot when left unset (None); ``q_ref`` too.
 ROBOT_RELATIVE = ("step_length", "step_height", "step_length_bounds", "step_height_bounds",
@@ -83,7 +83,7 @@ class Params(StudyParams):
         description="stroke centre c forward of the hip, m (None: the whole robot's COM "
                     "offset from the hips' centre at the standing posture)")
     swing_points: tuple[Pair, ...] | None = Field(default=None, max_length=1000)
-    samples_per_cycle: int = Field(default=64, ge=16, le=4096)
+    samples_per_cycle: StrictInt = Field(default=64, ge=16, le=4096)
     stability_margin: float | None = Field(
         default=None, ge=-1.0, le=1.0,
         description="required static stability margin, m (None: 0.25 % of the leg length)")
@@ -93,7 +93,7 @@ class Params(StudyParams):
     objective: Literal["energy_per_metre", "energy_per_cycle"] = "energy_per_metre"
     servo_offset_deg: dict[str, PerJoint] | None = Field(default=None, max_length=8)
     servo_direction: dict[str, PerJointSign] | None = Field(default=None, max_length=8)
-    table_positions: int = Field(default=48, ge=2, le=1000)
+    table_positions: StrictInt = Field(default=48, ge=2, le=1000)
     compare_table2: bool = True
     q_ref: dict[str, PerJoint] | None = Field(
         default=None, max_length=8,

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 
 from legcore.studies.study import StudyParams
 
@@ -152,7 +152,7 @@ class Params(StudyParams):
     leg: LegName | None = None
     foot_frame: str | None = Field(default=None, min_length=1, max_length=200)
     T: float = Field(default=3.0, gt=0.0, le=60.0, description="swing duration, s")
-    n_via: int = Field(default=10, ge=1, le=40, description="intermediate via points")
+    n_via: StrictInt = Field(default=10, ge=1, le=40, description="intermediate via points")
     dt: float = Field(default=0.01, gt=0.0, le=1.0, description="sampling step, s")
     resolution: float = Field(default=RESOLUTION, ge=1e-6, le=0.1, description="rad")
     q_start: PerJoint | None = None
@@ -184,9 +184,9 @@ class Params(StudyParams):
         "solteiro2007_multi_criteria",
         "perez2010_min_energy",
     )
-    baseline_generations: int = Field(default=100, ge=1, le=1000)
-    baseline_pop_size: int = Field(default=100, ge=4, le=2000)
-    baseline_seed: int = Field(default=0, ge=0, le=2**32 - 1)
+    baseline_generations: StrictInt = Field(default=100, ge=1, le=1000)
+    baseline_pop_size: StrictInt = Field(default=100, ge=4, le=2000)
+    baseline_seed: StrictInt = Field(default=0, ge=0, le=2**32 - 1)
 
     @model_validator(mode="after")
     def _consistent(self) -> Params:

@@ -197,7 +197,10 @@ def _robot_view(ident: str, name: str, robot: Robot | LeggedRobot) -> RobotView:
     "/dashboard/robots/{robot_id}",
     response_model=RobotView,
     summary="A robot's joints, limits, masses and the study kinds that accept it",
-    responses={404: {"model": ErrorOut, "description": "No such robot (among yours)."}},
+    responses={
+        404: {"model": ErrorOut, "description": "No such robot (among yours)."},
+        409: {"model": ErrorOut, "description": "Your stored robot cannot be built any more."},
+    },
 )
 async def dashboard_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotView:
     """Your robot ``robot_id`` or a catalog robot: per joint its position limits (rad or m),

@@ -6,7 +6,7 @@ from datetime import datetime, timedelta
 from typing import Annotated
 
 from fastapi import APIRouter, Body, HTTPException, status
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
 from services.api.deps import AdminKey, Context, CurrentKey, Pagination
 from services.api.errors import not_found
@@ -64,9 +64,9 @@ class KeyCreate(BaseModel):
     expires_in_days: float | None = Field(
         default=None, gt=0, le=3650, description="Days until the key stops working (none: never)."
     )
-    max_active_jobs: int | None = Field(default=None, gt=0, le=1_000_000)
+    max_active_jobs: StrictInt | None = Field(default=None, gt=0, le=1_000_000)
     max_cpu_seconds_per_hour: float | None = Field(default=None, gt=0, le=1e9)
-    max_storage_bytes: int | None = Field(default=None, gt=0, le=2**62)
+    max_storage_bytes: StrictInt | None = Field(default=None, gt=0, le=2**62)
 
 
 class KeyCreated(KeyOut):
@@ -152,7 +152,11 @@ def create_key(
     "/keys/{key_id}/revoke",
     response_model=KeyOut,
     summary="Revoke an API key (admin)",
-    responses={**_403, 404: {"model": ErrorOut, "description": "No such key."}},
+    responses={
+        **_403,
+        404: {"model": ErrorOut, "description": "No such key."},
+        409: {"model": ErrorOut, "description": "The admin key of the request itself."},
+    },
 )
 def revoke_key(key_id: str, admin: AdminKey, ctx: Context) -> KeyOut:
     """The key is refused from now on (401); its jobs, sweeps and robots stay."""

@@ -16,6 +16,9 @@ export function h(spec, attrs = {}, ...children) {
     if (v === undefined || v === null || v === false) continue;
     if (k === "on") for (const [ev, fn] of Object.entries(v)) el.addEventListener(ev, fn);
     else if (k === "dataset") Object.assign(el.dataset, v);
+    // through the CSSOM: a style="" attribute is inline style, which the page's
+    // Content-Security-Policy refuses (style-src without 'unsafe-inline')
+    else if (k === "style") el.style.cssText = v;
     else if (k in el && typeof v !== "string") el[k] = v;
     else el.setAttribute(k, v === true ? "" : v);
   }

@@ -61,7 +61,7 @@ export async function render(main, _param, hash) {
     h("div.card",
       h("div.toolbar", search, kind, optimizer, robot, verdict, ...statusBoxes,
         st.sweep_id ? h("span.tag", `sweep ${shortId(st.sweep_id)}`) : null, h("span.spacer"), info),
-      h("div.scroll", { style: "max-height:none" }, table), pager));
+      h("div.scroll.full", table), pager));
 
   async function load() {
     clearTimeout(timer);

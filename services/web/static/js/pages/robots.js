@@ -6,7 +6,7 @@ import { clear, fill, h, num } from "../ui.js";
 export async function render(main, robotId) {
   const list = h("table#robots-table");
   const detail = h("div#robot-detail");
-  main.append(h("h1", "Robots"), h("div.row", h("div.card", { style: "flex:0 0 360px" }, list), h("div.grow", detail)));
+  main.append(h("h1", "Robots"), h("div.row", h("div.card.side", list), h("div.grow", detail)));
   const page = await api(`/robots${query({ include_catalog: true, limit: 1000 })}`);
   list.append(h("thead", h("tr", h("th", "name"), h("th", "source"))));
   const body = h("tbody");
@@ -38,7 +38,7 @@ export async function render(main, robotId) {
         h("thead", h("tr", h("th", "study"), h("th", "accepts"), h("th", "default task, or why not"))),
         h("tbody", r.studies.map((s) => h("tr", h("td", h("b", s.kind), h("div.muted", s.title)),
           h("td", s.accepts ? h("span.badge.succeeded", "yes") : h("span.badge.failed", "no")),
-          h("td", { style: "white-space:normal" }, fitText(s))))))));
+          h("td.wrap", fitText(s))))))));
   }
 }
 

@@ -25,7 +25,7 @@ export async function render(main, sweepId) {
       ...["csv", "parquet", "json"].map((f) => h("button.secondary", { dataset: { export: `cells-${f}` },
         on: { click: () => download(`/sweeps/${sweepId}/cells/export?format=${f}`, `cells.${f}`) } }, `cells ${f.toUpperCase()}`))),
     summary,
-    h("div.card", h("h2", "Cells (mean ± sd over seeds)"), h("div.scroll", { style: "max-height:none" }, table)),
+    h("div.card", h("h2", "Cells (mean ± sd over seeds)"), h("div.scroll.full", table)),
     h("div.card", h("h2", "Fronts of the chosen cells"), h("p.muted", "Tick cells in the table; click a point to open its job."), plot),
     h("div.card", h("div.toolbar", h("h2", "Recordings of the chosen cells, merged"), h("span.spacer"),
       h("button.secondary#open-merged", { on: { click: openMerged } }, "Open in the viewer")), viewerBox));

@@ -1,0 +1,102 @@
+"""``POST /sweeps/{id}/cancel``: cancel every unfinished job of a sweep in one request.
+
+One write transaction: the sweep's queued and running jobs are listed, then each goes through
+the store's own job cancellation (``lifecycle.request_cancel``, what ``POST /jobs/{id}/cancel``
+calls): a queued job becomes ``cancelled`` at once, a running one gets ``cancel_requested`` and
+its worker stops after its current generation. Finished jobs are left as they are, so the
+request is idempotent: a repeat cancels nothing more and says so.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter, status
+from pydantic import Field
+from sqlalchemy.orm import Session
+
+from services.api.deps import Context, CurrentKey
+from services.api.errors import not_found
+from services.api.schemas import ErrorOut, SweepSummary
+from services.store import lifecycle
+from services.store import repository as repo
+from services.store.tables import JobStatus
+
+__all__ = ["SweepCancelled", "router", "unfinished_job_ids"]
+
+router = APIRouter(tags=["sweeps"])
+
+#: Jobs listed per query while the unfinished ones are collected.
+_PAGE = 1000
+
+
+class SweepCancelled(SweepSummary):
+    """The sweep after ``POST /sweeps/{id}/cancel`` (counts and state) and what the request did:
+    ``cancelled + stopping + already_finished == n_jobs``."""
+
+    cancelled: int = Field(description="Queued jobs this request cancelled.")
+    stopping: int = Field(
+        description="Running jobs asked to stop (``cancel_requested``): each becomes "
+        "``cancelled`` after its current generation."
+    )
+    already_finished: int = Field(
+        description="Jobs already succeeded, failed or cancelled: left as they are."
+    )
+
+
+def unfinished_job_ids(session: Session, owner_key_id: str, sweep_id: str) -> list[str]:
+    """Ids of the sweep's queued and running jobs (all of them, read page by page)."""
+    ids: list[str] = []
+    while True:
+        page = repo.list_jobs(
+            session,
+            owner_key_id=owner_key_id,
+            sweep_id=sweep_id,
+            status=(JobStatus.QUEUED, JobStatus.RUNNING),
+            limit=_PAGE,
+            offset=len(ids),
+        )
+        ids += [j.id for j in page.items]
+        if not page.items or len(ids) >= page.total:
+            return ids
+
+
+_RESPONSES: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorOut, "description": "No such sweep (among yours)."}
+}
+
+
+@router.post(
+    "/sweeps/{sweep_id}/cancel",
+    status_code=status.HTTP_202_ACCEPTED,
+    response_model=SweepCancelled,
+    summary="Cancel every unfinished job of a sweep",
+    responses=_RESPONSES,
+)
+def cancel_sweep(sweep_id: str, key: CurrentKey, ctx: Context) -> SweepCancelled:
+    """In one transaction, every queued job of the sweep is cancelled and every running one
+    asked to stop after its current generation (as ``POST /jobs/{id}/cancel`` does one job);
+    finished jobs are left alone, so a repeat is harmless (``cancelled`` 0). Answers the
+    sweep's counts afterwards and how many jobs were cancelled, are stopping, or had already
+    finished."""
+    cancelled = stopping = 0
+    with ctx.write() as session:
+        sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
+        if sweep is None:
+            raise not_found("sweep", sweep_id)
+        for job_id in unfinished_job_ids(session, key.id, sweep.id):
+            job = lifecycle.request_cancel(session, job_id, owner_key_id=key.id)
+            if job is None:
+                continue
+            if job.status is JobStatus.CANCELLED:
+                cancelled += 1
+            elif not job.is_terminal:
+                stopping += 1
+        counts = repo.count_jobs_by_status(session, owner_key_id=key.id, sweep_id=sweep.id)
+    summary = SweepSummary.from_record(sweep, counts)
+    return SweepCancelled(
+        **summary.model_dump(),
+        cancelled=cancelled,
+        stopping=stopping,
+        already_finished=summary.n_jobs - cancelled - stopping,
+    )
