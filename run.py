@@ -105,6 +105,33 @@ def ensure_env() -> None:
     _pip(["install", "--no-deps", "-e", str(ROOT)], 1, "installing legopt")
     STAMP.write_text(want)
     print(f"run.py: environment ready in {time.monotonic() - t0:.0f} s", flush=True)
+    compile_kernels()
+
+
+def compile_kernels() -> None:
+    """Compile every numerical kernel the studies use into numba's cache, once per install, so
+    that no first job, test or request waits for it (``python -m legcore.warmup``: a tiny job
+    of every study kind and the numerical IK). Best effort: a failure only means a slower
+    first run. ``LEGOPT_SKIP_WARMUP=1`` skips it."""
+    if os.environ.get("LEGOPT_SKIP_WARMUP") == "1":
+        return
+    print("run.py: compiling the numerical kernels once (a few minutes on 2 cores; every "
+          "later run starts warm)", flush=True)  # fmt: skip
+    t0 = time.monotonic()
+    cmd = [str(_venv_bin("python")), "-m", "legcore.warmup"]
+    with LOG.open("a") as log:
+        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=log, text=True)
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            log.write(line)
+            if line.startswith("warmup: "):
+                print(f"run.py: compiled {line[len('warmup: '):].strip()}", flush=True)
+        code = proc.wait()
+    if code:
+        print(f"run.py: compiling the kernels failed (exit {code}; see {LOG}); the first run "
+              "compiles what it needs", flush=True)  # fmt: skip
+    else:
+        print(f"run.py: kernels compiled in {time.monotonic() - t0:.0f} s", flush=True)
 
 
 #: pytest options whose value is the next argument (so it is not taken for a test path).

@@ -19,7 +19,7 @@ import sys
 import time
 from typing import Any
 
-__all__ = ["warm_up", "warmup_spec"]
+__all__ = ["compiled_during", "warm_up", "warmup_spec"]
 
 #: Per-kind parameters that keep the warm-up job small.
 _SMALL: dict[str, dict[str, Any]] = {
@@ -102,9 +102,47 @@ def warm_up(
     return out
 
 
+def compiled_during(work: Any) -> list[str]:
+    """Run ``work()`` and return the kernels numba *compiled* meanwhile (``"name(args)"``);
+    kernels loaded from numba's cache are not listed (its ``numba:compile`` event fires only
+    on a cache miss). A process started after :func:`warm_up` lists none."""
+    from numba.core import event
+
+    compiled: list[str] = []
+
+    class _Compiles(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            d = ev.data or {}
+            name = getattr(d.get("dispatcher"), "__qualname__", None) or str(d.get("dispatcher"))
+            compiled.append(f"{name}{tuple(str(a) for a in d.get('args', ()))}")
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    listener = _Compiles()
+    event.register("numba:compile", listener)
+    try:
+        work()
+    finally:
+        event.unregister("numba:compile", listener)
+    return compiled
+
+
 def main(argv: list[str]) -> int:
+    """``python -m legcore.warmup [KIND ...] [--check]``: warm up (every kind and the
+    numerical IK by default); ``--check``: then print the kernels that still had to be
+    compiled (none, when the cache was warm) and exit 1 if any did."""
+    check = "--check" in argv
+    kinds = [a for a in argv if a != "--check"]
     t0 = time.perf_counter()
-    times = warm_up(argv or None, extras=True)
+    if check:
+        times: dict[str, float] = {}
+        compiled = compiled_during(
+            lambda: times.update(warm_up(kinds or None, extras=True, verbose=True))
+        )
+        print(f"warmup: {len(compiled)} kernels compiled" + "".join(f"\n  {c}" for c in compiled))
+        return 1 if compiled or not all(t == t for t in times.values()) else 0
+    times = warm_up(kinds or None, extras=True)
     print(f"warmup: {len(times)} kinds in {time.perf_counter() - t0:.1f} s", flush=True)
     return 0 if all(t == t for t in times.values()) else 1
 
