@@ -72,6 +72,15 @@ UrlOpt = Annotated[str | None, typer.Option("--url", help="API base URL (env LEG
 KeyOpt = Annotated[str | None, typer.Option("--key", help="API key (env LEGOPT_API_KEY)")]
 
 
+def free_port() -> int:
+    """A TCP port free on 127.0.0.1 now (for a service or viewer this command starts)."""
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
 def bad_input(message: str) -> typer.Exit:
     """Print ``message`` to stderr and return the exit-2 exception to raise."""
     from rich.markup import escape

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -21,18 +20,20 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from services.cli_common import api_call, app, bad_input, console, err_console, load_spec_file
+from services.cli_common import (
+    api_call,
+    app,
+    bad_input,
+    console,
+    err_console,
+    free_port,
+    load_spec_file,
+)
 from services.cli_jobs import follow, print_job_result, short
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: The port `legopt serve` listens on by default (what the "next" lines refer to).
 SERVE_PORT = 8000
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
 
 
 def _wait_healthy(url: str, server: subprocess.Popen[bytes], log_path: Path) -> None:
@@ -115,7 +116,7 @@ def demo(
     if generations is not None:
         for d in docs:
             d["budget"] = {"generations": generations}
-    port = port or _free_port()
+    port = port or free_port()
     url = f"http://127.0.0.1:{port}"
     data_dir = Path(get_settings().data_dir)
     data_dir.mkdir(parents=True, exist_ok=True)

@@ -207,7 +207,7 @@ def replay(
         Path | None, typer.Option("--save", help="save the recording here (no viewer unless --web)")
     ] = None,
     web: Annotated[bool, typer.Option("--web", help="serve the web viewer on localhost")] = False,
-    port: Annotated[int, typer.Option(help="web viewer port")] = 9090,
+    port: Annotated[int, typer.Option(help="web viewer port (0: a free one)")] = 0,
     point: Annotated[
         int | None,
         typer.Option("--point", min=0, help="front point K of the job (recording made on demand)"),
@@ -216,12 +216,15 @@ def replay(
     key: KeyOpt = None,
 ) -> None:
     """Open a job's Rerun recording in the viewer (the web viewer with --web), or --save it;
-    with --point K, the recording of the K-th point of its Pareto front."""
+    with --point K, the recording of the K-th point of its Pareto front. Without --save the
+    download goes to a temporary file, removed when the viewer stops."""
     import signal
+    import tempfile
 
     from services.worker import rerun_replay
 
     path = Path(target)
+    scratch: tempfile.TemporaryDirectory[str] | None = None
     if not path.exists():
         with client(url, key) as c:
             _, full = resolve_id(c, target)
@@ -230,9 +233,14 @@ def replay(
             else:
                 data = api_call(c.point_recording, full, point)
         name = f"{full}.rrd" if point is None else f"{full}-point-{point}.rrd"
-        path = save or Path(name)
+        if save is None:
+            scratch = tempfile.TemporaryDirectory(prefix="legopt-replay-")
+            path = Path(scratch.name) / name
+        else:
+            path = save
         path.write_bytes(data)
-        console.print(f"saved {path} ({len(data)} bytes)")
+        if save is not None:
+            console.print(f"saved {path} ({len(data)} bytes)")
     elif save is not None:
         save.write_bytes(path.read_bytes())
         path = save
@@ -244,15 +252,19 @@ def replay(
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, _interrupt)  # a terminated replay also stops its viewer
-    handle = rerun_replay.open_viewer(path, web=True if web else None, port=port)
-    if handle.url:
-        console.print(f"Rerun web viewer: {handle.url}  (Ctrl-C to stop)")
     try:
-        handle.wait()
-    except KeyboardInterrupt:
-        pass
+        handle = rerun_replay.open_viewer(path, web=True if web else None, port=port)
+        if handle.url:
+            console.print(f"Rerun web viewer: {handle.url}  (Ctrl-C to stop)")
+        try:
+            handle.wait()
+        except KeyboardInterrupt:
+            pass
+        finally:
+            handle.stop()
     finally:
-        handle.stop()
+        if scratch is not None:
+            scratch.cleanup()
 
 
 # ------------------------------------------------------------------ results and progress

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import re
 from pathlib import Path
+from typing import Any
 
 import yaml
 from typer.testing import CliRunner
@@ -120,3 +121,42 @@ def test_version_prints_the_installed_version() -> None:
 
     res = runner.invoke(app, ["--version"])
     assert res.exit_code == 0 and res.output.strip() == f"legopt {version('legopt')}"
+
+
+def test_replay_downloads_into_a_temporary_file_and_a_free_port(
+    tmp_path: Path, monkeypatch: Any
+) -> None:
+    """`legopt replay JOB` without --save leaves no file in the working directory (the download
+    goes to a temporary file, removed when the viewer stops) and asks for a free port (0)."""
+    import contextlib
+
+    from services import cli_jobs
+    from services.worker import rerun_replay
+
+    seen: dict[str, Any] = {}
+
+    class FakeClient:
+        def recording(self, job_id: str) -> bytes:
+            return b"RRF2-fake"
+
+    class Handle:
+        url = "http://127.0.0.1:1/"
+
+        def wait(self) -> None:
+            seen["exists_while_open"] = seen["path"].exists()
+
+        def stop(self) -> None:
+            pass
+
+    def open_viewer(path: Path, *, web: bool | None, port: int) -> Handle:
+        seen.update(path=path, port=port)
+        return Handle()
+
+    monkeypatch.setattr(cli_jobs, "client", lambda *a: contextlib.nullcontext(FakeClient()))
+    monkeypatch.setattr(cli_jobs, "resolve_id", lambda c, t: ("job", "0" * 8 + "-full"))
+    monkeypatch.setattr(rerun_replay, "open_viewer", open_viewer)
+    monkeypatch.chdir(tmp_path)
+    res = runner.invoke(app, ["replay", "00000000", "--web"])
+    assert res.exit_code == 0, res.output
+    assert seen["port"] == 0 and seen["exists_while_open"]
+    assert not seen["path"].exists() and list(tmp_path.iterdir()) == []
