@@ -25,7 +25,7 @@ import httpx
 import yaml
 
 from tests.integration.stack import ROOT
-from tests.patience import Patience
+from tests.patience import Patience, oversubscription
 
 RETRY_STATUS = {429, 500, 502, 503, 504}
 
@@ -92,7 +92,9 @@ def post(
     while not patience.expired():
         attempts += 1
         try:
-            r = httpx.post(f"{url}/api/v1{path}", json=body, headers=headers, timeout=timeout_s)
+            # one request's own bound stretches with the machine's load, as the deadline does
+            wait_s = timeout_s * oversubscription()
+            r = httpx.post(f"{url}/api/v1{path}", json=body, headers=headers, timeout=wait_s)
         except httpx.TransportError as exc:
             last = f"{type(exc).__name__}: {exc}"
             time.sleep(0.2)
