@@ -21,7 +21,12 @@ from fastapi.security import APIKeyHeader
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
-from services.api.rate_limit import RateLimiter, retry_after_header
+from services.api.rate_limit import (
+    COST_BYTES,
+    RateLimiter,
+    request_cost,
+    retry_after_header,
+)
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT
 from services.store.artifacts import ArtifactStore
 from services.store.keys import hash_api_key
@@ -135,9 +140,10 @@ _api_key = APIKeyHeader(
 
 
 def current_key(
-    ctx: Context, raw_key: Annotated[str | None, Security(_api_key)] = None
+    ctx: Context, request: Request, raw_key: Annotated[str | None, Security(_api_key)] = None
 ) -> ApiKeyRecord:
-    """The API key of the caller (looked up by its hash); 401 when missing or unknown."""
+    """The API key of the caller (looked up by its hash); 401 when missing or unknown; 429
+    past its request rate (a large body costs more, ``rate_limit.request_cost``)."""
     if not raw_key:
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,
@@ -160,12 +166,14 @@ def current_key(
             headers={"WWW-Authenticate": API_KEY_HEADER},
         )
     if ctx.rate_limiter is not None:
-        wait = ctx.rate_limiter.acquire(key.id)
+        cost = request_cost(request.headers.get("content-length"))
+        wait = ctx.rate_limiter.acquire(key.id, cost=cost)
         if wait > 0:
             raise HTTPException(
                 status.HTTP_429_TOO_MANY_REQUESTS,
                 f"too many requests for this API key: at most {ctx.settings.rate_limit_per_s:g} "
-                f"per second (bursts of {ctx.settings.rate_limit_burst}); retry in "
+                f"per second (bursts of {ctx.settings.rate_limit_burst}; a request counts 1 "
+                f"plus 1 per {COST_BYTES // 1024} KiB of its body); retry in "
                 f"{retry_after_header(wait)} s",
                 headers={"Retry-After": retry_after_header(wait)},
             )

@@ -1,9 +1,11 @@
 """Per-API-key request rate limit: a token bucket per key, in each API process.
 
 A key may make ``burst`` requests at once and ``rate_per_s`` per second sustained; beyond that
-the API answers 429 with ``Retry-After``. Buckets live in the process (each uvicorn worker
-process limits on its own, so the cluster-wide limit is at most processes × rate), which is
-enough to stop one key from monopolising the API without a shared store.
+the API answers 429 with ``Retry-After``. A request takes one token plus one per full
+``COST_BYTES`` of its body (:func:`request_cost`): large uploads count for what they weigh.
+Buckets live in the process (each uvicorn worker process limits on its own, so the
+cluster-wide limit is at most processes × rate), which is enough to stop one key from
+monopolising the API without a shared store.
 """
 
 from __future__ import annotations
@@ -24,21 +26,36 @@ class RateLimiter:
         self._buckets: OrderedDict[str, tuple[float, float]] = OrderedDict()
         self._lock = threading.Lock()
 
-    def acquire(self, key_id: str, now: float | None = None) -> float:
-        """Take one token for ``key_id``: 0.0 if allowed, else seconds until one is available."""
+    def acquire(self, key_id: str, now: float | None = None, *, cost: int = 1) -> float:
+        """Take ``cost`` tokens (at most ``burst``) for ``key_id``: 0.0 if allowed, else seconds
+        until they are available."""
         now = time.monotonic() if now is None else now
+        need = float(min(max(1, cost), self.burst))
         with self._lock:
             tokens, last = self._buckets.pop(key_id, (float(self.burst), now))
             tokens = min(float(self.burst), tokens + (now - last) * self.rate_per_s)
             wait = 0.0
-            if tokens >= 1.0:
-                tokens -= 1.0
+            if tokens >= need:
+                tokens -= need
             else:
-                wait = (1.0 - tokens) / self.rate_per_s
+                wait = (need - tokens) / self.rate_per_s
             self._buckets[key_id] = (tokens, now)
             while len(self._buckets) > self.max_keys:
                 self._buckets.popitem(last=False)
             return wait
+
+
+#: Body bytes one rate-limit token pays for, beyond the request's own token.
+COST_BYTES = 256 * 1024
+
+
+def request_cost(content_length: str | None) -> int:
+    """Tokens a request takes: 1, plus 1 per full ``COST_BYTES`` of its declared body."""
+    try:
+        size = max(0, int(content_length or 0))
+    except ValueError:
+        size = 0
+    return 1 + size // COST_BYTES
 
 
 def retry_after_header(wait_s: float) -> str:
@@ -46,4 +63,4 @@ def retry_after_header(wait_s: float) -> str:
     return str(max(1, math.ceil(wait_s)))
 
 
-__all__ = ["RateLimiter", "retry_after_header"]
+__all__ = ["COST_BYTES", "RateLimiter", "request_cost", "retry_after_header"]

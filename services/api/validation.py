@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import logging
-from collections.abc import Callable, MutableMapping, Sequence
+from collections.abc import Callable, Iterable, MutableMapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,6 +20,7 @@ from pydantic import ValidationError
 
 from legcore.jobspec import JobSpec, parse_job_spec, spec_error_locations
 from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog, parse_robot_spec
+from legcore.robots.capabilities import capabilities
 from legcore.runner import JobSize, job_size
 from legcore.studies.registry import plugin_errors
 from services.api.errors import (
@@ -120,6 +121,37 @@ def build_inline_robot(spec: Any, loc: Loc) -> tuple[dict[str, Any], Robot | Leg
     return {"kind": parsed.kind, **spec}, robot
 
 
+@dataclass(frozen=True)
+class RobotInfo:
+    """What the API answers about a validated robot, as plain (picklable) data: computed where
+    the model was built (a validation process, see ``services.api.validation_pool``)."""
+
+    source: str  # "catalog" | "dh" | "urdf"
+    spec: dict[str, Any]  # the document to store: {"catalog": name} or the inline spec
+    inline_spec: dict[str, Any] | None  # the spec the model was built from, as JSON
+    summary: RobotSummary
+    capabilities: dict[str, Any]  # legcore's ``Capabilities.as_dict()``
+
+
+def robot_info(source: str, spec: dict[str, Any], robot: Robot | LeggedRobot) -> RobotInfo:
+    """Summary, capabilities and inline spec of a built model (None for a catalog legged
+    robot, which has no single spec)."""
+    inline = robot.spec.model_dump(mode="json") if robot.spec is not None else None
+    caps = capabilities(robot).as_dict()
+    return RobotInfo(source, spec, inline, summarize_robot(robot), caps)
+
+
+def check_robot_doc(catalog_name: str | None, spec: Any) -> RobotInfo:
+    """Validate and build the robot of ``POST /robots`` (and ``/robots/validate``): the
+    catalog entry ``catalog_name``, else the inline ``spec``; 422 at ``body.catalog`` /
+    ``body.spec`` (and below) otherwise."""
+    if catalog_name is not None:
+        robot = catalog_robot(catalog_name, ("body", "catalog"))
+        return robot_info("catalog", {"catalog": catalog_name}, robot)
+    doc, built = build_inline_robot(spec, ("body", "spec"))
+    return robot_info(str(doc["kind"]), doc, built)
+
+
 # --------------------------------------------------------------------------- job specs
 
 
@@ -161,6 +193,19 @@ def resolve_robot(doc: dict[str, Any], lookup: RobotLookup, prefix: Loc) -> dict
         "must be a catalog name, the id of a stored robot, or an inline robot spec (object)",
         "robot_type",
     )
+
+
+def stored_references(docs: Iterable[Any], lookup: RobotLookup) -> dict[str, Any]:
+    """``{reference: document or None}`` for every ``robot`` of ``docs`` that names no
+    catalog robot (a stored robot's id or name), each looked up once: ``table.get`` then
+    resolves them as ``lookup`` would, without the database (see ``resolve_robot``)."""
+    known = set(catalog.names())
+    table: dict[str, Any] = {}
+    for doc in docs:
+        robot = doc.get("robot") if isinstance(doc, dict) else None
+        if isinstance(robot, str) and robot not in known and robot not in table:
+            table[robot] = lookup(robot)
+    return table
 
 
 def _job_errors(exc: ValidationError, doc: dict[str, Any], prefix: Loc) -> list[dict[str, Any]]:
@@ -386,12 +431,16 @@ def example_specs() -> dict[str, dict[str, Any]]:
 
 __all__: Sequence[str] = [
     "CheckedJob",
+    "RobotInfo",
     "RobotLookup",
     "RobotSummary",
     "build_inline_robot",
     "catalog_robot",
     "check_job_spec",
+    "check_robot_doc",
     "example_specs",
     "resolve_robot",
+    "robot_info",
+    "stored_references",
     "summarize_robot",
 ]

@@ -124,6 +124,21 @@ class Settings(BaseModel):
     rate_limit_burst: int = Field(
         default=500, gt=0, description="Requests one API key may make at once before limiting."
     )
+    validation_processes: int = Field(
+        default=1,
+        ge=0,
+        description="Processes of each API process that validate submissions (robot builds and "
+        "job preparation of POST /jobs, /sweeps, /robots: services.api.validation_pool); 0: "
+        "in the API process itself (no isolation: for debugging, and tests that patch the "
+        "validation code).",
+    )
+    validation_timeout_s: float = Field(
+        default=120.0,
+        gt=0,
+        description="Longest one submission's validation may run in a validation process; "
+        "then that process is killed and the request gets a 422 saying the model could not "
+        "be validated.",
+    )
     sqlite_busy_timeout_ms: int = Field(
         default=30_000, ge=0, description="SQLite busy_timeout of every connection."
     )

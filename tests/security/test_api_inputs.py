@@ -311,8 +311,13 @@ def urdf_leg(n_fixed: int = 40) -> str:
 
 
 @pytest.fixture
-def urdf_builds(monkeypatch: pytest.MonkeyPatch) -> list[str]:
-    """Names of the URDF robots built (by the API or by legcore's prepare) during a test."""
+def urdf_builds(api: Api, monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """Names of the URDF robots built (by the API or by legcore's prepare) during a test.
+
+    The app validates in its own process meanwhile (``validation_processes=0``): a validation
+    process would not see the patched builder (nor a patched ``spec_cache`` limit)."""
+    inline = api.ctx.settings.with_overrides(validation_processes=0)
+    monkeypatch.setattr(api.ctx, "settings", inline)
     built: list[str] = []
     original = robot_build._build_urdf
 

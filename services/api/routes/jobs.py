@@ -42,7 +42,8 @@ from services.api.submission import (
     remember,
     replay_headers,
 )
-from services.api.validation import check_job_spec, example_specs
+from services.api.validation import example_specs
+from services.api.validation_pool import check_job
 from services.store import lifecycle
 from services.store import repository as repo
 from services.store.errors import ArtifactError
@@ -103,8 +104,8 @@ def submit_job(
     try:
         with ctx.read() as session:
             check_replay(session, key, idempotency_key, fingerprint, "job")
-            checked = check_job_spec(
-                spec, settings=ctx.settings, lookup=robot_lookup(session, key.id)
+            checked = check_job(
+                spec, settings=ctx.settings, key_id=key.id, lookup=robot_lookup(session, key.id)
             )
         with ctx.write() as session:
             check_replay(session, key, idempotency_key, fingerprint, "job")

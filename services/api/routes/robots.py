@@ -9,7 +9,6 @@ from pydantic import BaseModel, Field
 from sqlalchemy.orm import Session
 
 from legcore.robots import LeggedRobot, Robot, catalog
-from legcore.robots.capabilities import Capabilities, capabilities
 from services.api.deps import Context, CurrentKey, Pagination
 from services.api.errors import invalid, not_found
 from services.api.schemas import (
@@ -25,12 +24,8 @@ from services.api.schemas import (
 )
 from services.api.spec_cache import build_robot_cached
 from services.api.study_fits import StudyFitOut, robot_fits
-from services.api.validation import (
-    RobotLookup,
-    build_inline_robot,
-    catalog_robot,
-    summarize_robot,
-)
+from services.api.validation import RobotInfo, RobotLookup, robot_info, summarize_robot
+from services.api.validation_pool import check_robot
 from services.store import repository as repo
 from services.store.records import RobotRecord
 
@@ -64,10 +59,9 @@ class CapabilitiesOut(BaseModel):
     floating_base: bool = Field(description="The whole robot's model has a free-flyer root.")
 
     @classmethod
-    def of(cls, caps: Capabilities) -> CapabilitiesOut:
-        d = caps.as_dict()
-        d.pop("name")
-        return cls.model_validate(d)
+    def of(cls, caps: dict[str, Any]) -> CapabilitiesOut:
+        """From legcore's ``Capabilities.as_dict()`` (``RobotInfo.capabilities``)."""
+        return cls.model_validate({k: v for k, v in caps.items() if k != "name"})
 
 
 class RobotDetailOut(RobotDetail):
@@ -91,17 +85,6 @@ class RobotValidationOut(RobotValidation):
 _404: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such robot (among yours)."}
 }
-
-
-def validated_robot(
-    body: RobotValidate,
-) -> tuple[str, dict[str, Any], Robot | LeggedRobot]:
-    """``(source, stored spec, built model)`` of a robot request; 422 naming the field."""
-    if body.catalog is not None:
-        robot = catalog_robot(body.catalog, ("body", "catalog"))
-        return "catalog", {"catalog": body.catalog}, robot
-    doc, built = build_inline_robot(body.spec, ("body", "spec"))
-    return str(doc["kind"]), doc, built
 
 
 def robot_lookup(session: Session, owner_key_id: str) -> RobotLookup:
@@ -133,16 +116,15 @@ def _out(record: RobotRecord) -> RobotOut:
     )
 
 
-def _detail(record: RobotRecord, robot: Robot | LeggedRobot | None = None) -> RobotDetailOut:
-    if robot is None:
-        spec = record.spec
-        robot = catalog.get(spec["catalog"]) if "catalog" in spec else build_robot_cached(spec)
+def _detail(base: RobotOut, info: RobotInfo) -> RobotDetailOut:
+    """A robot's detail from its ``RobotInfo`` (plain data: what a validation process, or
+    this process for a stored robot, found building it)."""
     return RobotDetailOut(
-        **_out(record).model_dump(),
-        spec=record.spec,
-        inline_spec=_inline_spec(robot),
-        summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
-        capabilities=CapabilitiesOut.of(capabilities(robot)),
+        **base.model_dump(),
+        spec=info.spec,
+        inline_spec=info.inline_spec,
+        summary=RobotSummaryOut.from_summary(info.summary),
+        capabilities=CapabilitiesOut.of(info.capabilities),
     )
 
 
@@ -150,20 +132,10 @@ def _catalog_out(name: str) -> RobotOut:
     return RobotOut(id=name, name=name, source="catalog", catalog=name, builtin=True)
 
 
-def _inline_spec(robot: Robot | LeggedRobot) -> dict[str, Any] | None:
-    """The spec a robot was built from, as JSON (None for a catalog legged robot)."""
-    return robot.spec.model_dump(mode="json") if robot.spec is not None else None
-
-
-def _catalog_detail(name: str) -> RobotDetailOut:
-    robot = catalog.get(name)
-    return RobotDetailOut(
-        **_catalog_out(name).model_dump(),
-        spec={"catalog": name},
-        inline_spec=_inline_spec(robot),
-        summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
-        capabilities=CapabilitiesOut.of(capabilities(robot)),
-    )
+def _stored_model(spec: dict[str, Any]) -> Robot | LeggedRobot:
+    """The model of a stored robot (a catalog entry or an inline spec, built once per process
+    for the last few distinct documents)."""
+    return catalog.get(spec["catalog"]) if "catalog" in spec else build_robot_cached(spec)
 
 
 @router.post(
@@ -180,13 +152,13 @@ def create_robot(
     store it. Job specs can then use its id (or name) as ``robot``."""
     if body.name in catalog.names():
         raise invalid(("body", "name"), f"{body.name!r} is a catalog robot's name; choose another")
-    source, spec, robot = validated_robot(body)
+    info = check_robot(body.catalog, body.spec, settings=ctx.settings, key_id=key.id)
     with ctx.write() as session:
         record = repo.create_robot(
-            session, owner_key_id=key.id, name=body.name, source_kind=source, spec=spec
+            session, owner_key_id=key.id, name=body.name, source_kind=info.source, spec=info.spec
         )
     response.headers["Location"] = f"{ctx.prefix}/robots/{record.id}"
-    return _detail(record, robot)
+    return _detail(_out(record), info)
 
 
 @router.post(
@@ -194,13 +166,13 @@ def create_robot(
     response_model=RobotValidationOut,
     summary="Validate and build a robot model without storing it",
 )
-def validate_robot(body: RobotValidate, key: CurrentKey) -> RobotValidationOut:
+def validate_robot(body: RobotValidate, key: CurrentKey, ctx: Context) -> RobotValidationOut:
     """200 with a summary of the built model and its capabilities, or 422 naming the field."""
-    source, _spec, robot = validated_robot(body)
+    info = check_robot(body.catalog, body.spec, settings=ctx.settings, key_id=key.id)
     return RobotValidationOut(
-        source=source,  # type: ignore[arg-type]
-        summary=RobotSummaryOut.from_summary(summarize_robot(robot)),
-        capabilities=CapabilitiesOut.of(capabilities(robot)),
+        source=info.source,  # type: ignore[arg-type]
+        summary=RobotSummaryOut.from_summary(info.summary),
+        capabilities=CapabilitiesOut.of(info.capabilities),
     )
 
 
@@ -239,15 +211,16 @@ def get_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotDetailOut:
     """Your robot ``robot_id``, or the catalog robot of that name, with its capabilities and
     whether each study kind accepts it with its default task (``studies``)."""
     if robot_id in catalog.names():
-        out = _catalog_detail(robot_id)
-        return out.model_copy(update={"studies": robot_fits(catalog.get(robot_id))})
-    with ctx.read() as session:
-        record = repo.get_robot(session, robot_id, owner_key_id=key.id)
-    if record is None:
-        raise not_found("robot", robot_id)
-    spec = record.spec
-    robot = catalog.get(spec["catalog"]) if "catalog" in spec else build_robot_cached(spec)
-    return _detail(record, robot).model_copy(update={"studies": robot_fits(robot)})
+        base, spec = _catalog_out(robot_id), {"catalog": robot_id}
+    else:
+        with ctx.read() as session:
+            record = repo.get_robot(session, robot_id, owner_key_id=key.id)
+        if record is None:
+            raise not_found("robot", robot_id)
+        base, spec = _out(record), record.spec
+    robot = _stored_model(spec)
+    out = _detail(base, robot_info(base.source, spec, robot))
+    return out.model_copy(update={"studies": robot_fits(robot)})
 
 
 @router.get(

@@ -5,11 +5,10 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Query, Response, status
-from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse
 
 from services.api.deps import Context, CurrentKey, IdPrefix, Pagination
-from services.api.errors import MAX_ERRORS, invalid, not_found, validation_error
+from services.api.errors import VALIDATION_ERROR_SCHEMA, invalid, not_found
 from services.api.merged_recordings import merged_recording
 from services.api.routes.robots import robot_lookup
 from services.api.schemas import (
@@ -31,7 +30,8 @@ from services.api.submission import (
     replay_headers,
 )
 from services.api.sweeps import SweepError, SweepPoint, expand, swept_paths
-from services.api.validation import CheckedJob, check_job_spec, resolve_robot
+from services.api.validation import CheckedJob, resolve_robot
+from services.api.validation_pool import check_sweep
 from services.store import repository as repo
 from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
@@ -135,27 +135,10 @@ def _expand_and_check(
         points = expand(base, body.grid, body.entries, body.seeds, max_jobs=ctx.max_sweep_jobs)
     except SweepError as exc:
         raise invalid(("body", *exc.loc), exc.message) from None
-    checked: list[CheckedJob] = []
-    errors: list[dict[str, Any]] = []
-    seen: set[tuple[str, str]] = set()
-    cache: dict[str, Any] = {}
-    for point in points:
-        try:
-            checked.append(
-                check_job_spec(
-                    point.spec, settings=ctx.settings, lookup=lookup, prefix=_BASE, cache=cache
-                )
-            )
-        except RequestValidationError as exc:
-            for err in _relocate(list(exc.errors()), point):
-                ident = (repr(err["loc"]), err["msg"])
-                if ident not in seen:
-                    seen.add(ident)
-                    errors.append(err)
-            if len(errors) >= MAX_ERRORS:
-                break
-    if errors:
-        raise validation_error(errors)
+    checked = check_sweep(
+        points, relocate=_relocate, settings=ctx.settings, key_id=key_id, lookup=lookup,
+        prefix=_BASE,
+    )  # fmt: skip
     return base, points, checked
 
 
@@ -280,7 +263,11 @@ MAX_MERGED_JOBS = 32
     responses={
         200: {"content": {"application/octet-stream": {}}, "description": "The merged .rrd."},
         **_404,
-        422: {"model": ErrorOut, "description": "A chosen job is not in the sweep."},
+        422: {
+            "description": "A chosen job is not in the sweep or has no recording, or too many "
+            "jobs (a validation error located at `query.jobs`).",
+            "content": {"application/json": {"schema": VALIDATION_ERROR_SCHEMA}},
+        },
     },
 )
 def get_sweep_recording(
