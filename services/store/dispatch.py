@@ -118,7 +118,9 @@ def claim_sends(
 def record_sent(
     session: Session, job_ids: Sequence[str], *, actor: str, now: datetime | None = None
 ) -> None:
-    """Record a ``dispatched`` event for each job whose message was sent."""
+    """Record a ``dispatched`` event for each job whose message was sent; ``now``: the time
+    its send was claimed (``claim_sends``' ``now``, the job's ``last_dispatch_at``), so the
+    events show the protocol's own clock even when the publish itself was slow."""
     add_events(session, JobEventKind.DISPATCHED, job_ids, actor=actor, now=now)
 
 

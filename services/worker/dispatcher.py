@@ -92,10 +92,11 @@ def _send_claimed(
             unsent = list(ids[i:])  # the broker is down: stop, keep the rest due
             break
         sent.append(job_id)
-    retry_at = (now or datetime.now(UTC)) + timedelta(seconds=settings.dispatch_period_s)
+    claimed_at = now or datetime.now(UTC)
+    retry_at = claimed_at + timedelta(seconds=settings.dispatch_period_s)
     with session_scope(bind, immediate=True) as s:
-        if sent:
-            record_sent(s, sent, actor=actor)
+        if sent:  # the event's time is the claim's (the protocol's clock: last_dispatch_at)
+            record_sent(s, sent, actor=actor, now=claimed_at)
         if unsent:
             release_sends(s, unsent, retry_at=retry_at)
     return unsent
@@ -114,9 +115,10 @@ def send_now(
     process's)."""
     settings = settings or get_settings()
     backoff = backoff_schedule(settings.lease_seconds)
+    now = datetime.now(UTC)
     with session_scope(bind, immediate=True) as s:
-        ids = claim_sends(s, job_ids=list(job_ids), backoff_s=backoff)
-    return _send_claimed(ids, send, actor, settings, bind)
+        ids = claim_sends(s, job_ids=list(job_ids), backoff_s=backoff, now=now)
+    return _send_claimed(ids, send, actor, settings, bind, now)
 
 
 def dispatch_pass(
