@@ -68,7 +68,9 @@ def test_the_recording_gets_its_fronts_from_memory(
 
     seen: dict[str, Any] = {}
 
-    def fake_write(result: Any, path: Path, *, recording_id: str, fronts: Any) -> list[str]:
+    def fake_write(
+        result: Any, path: Path, *, recording_id: str, fronts: Any, **_: Any
+    ) -> list[str]:
         seen["fronts"] = fronts
         path.write_bytes(b"rrd")
         return []
