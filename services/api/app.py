@@ -12,12 +12,14 @@ Tests build their own app, e.g.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any
 
 from fastapi import APIRouter, Depends, FastAPI
 
+from services.api import validation_pool
 from services.api.body_limit import DEFAULT_MAX_BODY_BYTES, BodySizeLimitMiddleware
 from services.api.deps import API_KEY_HEADER, ApiContext, Enqueue, current_key, default_enqueue
 from services.api.errors import install_error_handlers
@@ -77,6 +79,11 @@ def create_app(
     @asynccontextmanager
     async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
         yield
+        # A server (uvicorn runs the event loop on the main thread, and re-raises SIGTERM after
+        # this, so atexit never runs) stops its validation processes here; an in-process test
+        # client (its own thread) leaves the shared pool to the next one.
+        if threading.current_thread() is threading.main_thread():
+            validation_pool.shutdown()
         ctx.close()
 
     app = FastAPI(

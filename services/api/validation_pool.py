@@ -38,6 +38,7 @@ gh-115634).
 
 from __future__ import annotations
 
+import atexit
 import logging
 import multiprocessing
 import os
@@ -306,12 +307,38 @@ _pools: dict[int, ValidationPool] = {}
 _pools_lock = threading.Lock()
 
 
+def shutdown() -> None:
+    """Stop this process's validation processes, the forkserver and the resource tracker, and
+    wait for them: the API's shutdown (``services.api.app``'s lifespan) and, for other users,
+    ``atexit``, so an API that stops (SIGTERM, Ctrl-C) exits with no process left behind. After
+    a kill -9 of the API they exit on their own (end of file on the pipes from the API; the
+    children's watchdog)."""
+    from multiprocessing import forkserver, resource_tracker
+
+    with _pools_lock:
+        pools = list(_pools.values())
+        _pools.clear()
+    for p in pools:
+        with p._pool_lock:
+            if p._executor is not None:
+                p._executor.shutdown(wait=True, cancel_futures=True)
+                p._executor = None
+    servers: list[Any] = [forkserver._forkserver, resource_tracker._resource_tracker]
+    for server in servers:  # their private _stop: close the pipe, wait for the process
+        try:
+            server._stop()
+        except Exception:  # noqa: BLE001 - shutting down: nothing left to protect
+            log.warning("could not stop %s", type(server).__name__, exc_info=True)
+
+
 def pool(settings: Settings) -> ValidationPool:
     """This process's pool of ``settings.validation_processes`` processes, made on first use
     (one per process; tests may also use another size)."""
     with _pools_lock:
         found = _pools.get(settings.validation_processes)
         if found is None:
+            if not _pools:
+                atexit.register(shutdown)
             found = _pools[settings.validation_processes] = ValidationPool(
                 settings.validation_processes
             )

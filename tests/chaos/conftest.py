@@ -12,6 +12,7 @@ Teardown of the stack checks that no process it started (or a descendant) surviv
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,6 +21,7 @@ import pytest
 from tests.chaos.harness import ChaosRedis, ChaosStack
 from tests.chaos.scenario import Scenario
 from tests.integration.stack import KINDS, postgres_database
+from tests.patience import Patience
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -74,7 +76,12 @@ def _run(st: ChaosStack) -> Iterator[ChaosStack]:
         st.stop()
         if st.redis is not None:
             st.redis.stop()
+        # a child exits when it sees its parent gone (end of file on a pipe): give it a moment
+        patience = Patience(10)
         left = st.leftover_processes()
+        while left and not patience.expired():
+            time.sleep(0.1)
+            left = st.leftover_processes()
         st.kill_leftovers()
         assert not left, f"processes left after the {st.kind} stack stopped: {left}"
 
