@@ -83,15 +83,12 @@ def _key(problem: Any) -> tuple[Any, ...]:
 
 def measure_bytes_per_sample(problem: Any, X: np.ndarray | None = None) -> float:
     """Peak bytes ``problem._evaluate`` allocates per individual-sample, measured with
-    tracemalloc on ``X`` (default: :data:`CALIBRATION_ROWS` fixed random rows in the bounds),
-    in steady state: one untraced evaluation of two rows first builds whatever the problem
-    creates once (lazy tables, kernel dispatch), which the per-sample figure must not count."""
+    tracemalloc on ``X`` (default: :data:`CALIBRATION_ROWS` fixed random rows in the bounds)."""
     if X is None:
         rng = np.random.default_rng(12345)
         X = problem.snap(rng.uniform(problem.xl, problem.xu,
                                      (CALIBRATION_ROWS, problem.n_var)))
     X = np.ascontiguousarray(X, dtype=float)
-    problem._evaluate(X[:2])
     with _TRACE_LOCK:  # one measurement at a time: another thread's stop() would end ours
         was_tracing = tracemalloc.is_tracing()
         if not was_tracing:

@@ -74,7 +74,10 @@ def test_evaluate_passes_at_most_chunk_rows() -> None:
 def test_chunk_rows_and_budget() -> None:
     problem = prepare(SWING).problem
     bps = bytes_per_sample(problem)
-    assert bps == pytest.approx(measure_bytes_per_sample(problem), rel=0.05)  # remembered
+    # remembered from the first evaluation of this kind in the process, which may also count
+    # one-time buffers (a (B, K, 3) float array: 24 B per sample) a later measurement reuses
+    measured = measure_bytes_per_sample(problem)
+    assert 0.95 * measured <= bps <= 1.25 * measured
     assert bytes_per_sample(problem) == bps
     assert chunk_rows(problem, 10 * MIB) == int(10 * MIB // (301 * bps))
     assert chunk_rows(problem, 1) == 1
