@@ -287,6 +287,13 @@ class ValidationPool:
                     self._executor = None
             raise BrokenProcessPool("validation processes die as soon as they start")
 
+    def close(self) -> None:
+        """Stop the validation processes and wait for them (the next request makes new ones)."""
+        with self._pool_lock:
+            if self._executor is not None:
+                self._executor.shutdown(wait=True, cancel_futures=True)
+                self._executor = None
+
     def _discard(self, executor: ProcessPoolExecutor, *, kill: bool) -> None:
         """Stop using ``executor``, killing its processes first when ``kill``; the next
         request makes a new pool."""
@@ -319,10 +326,7 @@ def shutdown() -> None:
         pools = list(_pools.values())
         _pools.clear()
     for p in pools:
-        with p._pool_lock:
-            if p._executor is not None:
-                p._executor.shutdown(wait=True, cancel_futures=True)
-                p._executor = None
+        p.close()
     servers: list[Any] = [forkserver._forkserver, resource_tracker._resource_tracker]
     for server in servers:  # their private _stop: close the pipe, wait for the process
         try:

@@ -36,6 +36,7 @@ from services.store.lifecycle import (
     mark_cancelled,
     record_generation,
     request_cancel,
+    request_cancels,
     requeue_expired,
     save_checkpoint,
 )
@@ -165,6 +166,7 @@ __all__ = [
     "mark_cancelled",
     "record_generation",
     "request_cancel",
+    "request_cancels",
     "requeue_expired",
     "reset_engine",
     "save_checkpoint",

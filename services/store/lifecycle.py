@@ -368,26 +368,48 @@ def request_cancel(
     stops after its next progress write or heartbeat (``record_generations`` and
     ``renew_lease`` answer the flag, then ``mark_cancelled``); a finished job is left as it is.
     """
-    now = now_utc(now)
-    owner = [] if owner_key_id is None else [JOBS.c.owner_key_id == owner_key_id]
-    cancelled = session.execute(
-        update(JOBS)
-        .where(JOBS.c.id == job_id, JOBS.c.status == JobStatus.QUEUED, *owner)
-        .values(
-            status=JobStatus.CANCELLED,
-            cancel_requested=True,
-            finished_at=now,
-            dispatch_due_at=None,
-        )
-        .returning(JOBS.c.id)
-    ).scalars().all()
-    add_events(session, JobEventKind.CANCELLED, cancelled, detail="cancelled while queued", now=now)
-    session.execute(
-        update(JOBS)
-        .where(JOBS.c.id == job_id, JOBS.c.status == _RUNNING, *owner)
-        .values(cancel_requested=True)
-    )
+    request_cancels(session, [job_id], owner_key_id=owner_key_id, now=now)
     return get_job(session, job_id, owner_key_id=owner_key_id)
+
+
+def request_cancels(
+    session: Session,
+    job_ids: Sequence[str],
+    *,
+    owner_key_id: str | None = None,
+    now: datetime | None = None,
+) -> tuple[list[str], list[str]]:
+    """:func:`request_cancel` for many jobs in two statements: ``(cancelled, stopping)`` — the
+    queued jobs now cancelled and the running ones now asked to stop; missing, other owners'
+    and finished jobs are left as they are."""
+    if not job_ids:
+        return [], []
+    now = now_utc(now)
+    ids = JOBS.c.id.in_(list(job_ids))
+    owner = [] if owner_key_id is None else [JOBS.c.owner_key_id == owner_key_id]
+    cancelled = list(
+        session.execute(
+            update(JOBS)
+            .where(ids, JOBS.c.status == JobStatus.QUEUED, *owner)
+            .values(
+                status=JobStatus.CANCELLED,
+                cancel_requested=True,
+                finished_at=now,
+                dispatch_due_at=None,
+            )
+            .returning(JOBS.c.id)
+        ).scalars()
+    )
+    add_events(session, JobEventKind.CANCELLED, cancelled, detail="cancelled while queued", now=now)
+    stopping = list(
+        session.execute(
+            update(JOBS)
+            .where(ids, JOBS.c.status == _RUNNING, *owner)
+            .values(cancel_requested=True)
+            .returning(JOBS.c.id)
+        ).scalars()
+    )
+    return cancelled, stopping
 
 
 def is_cancel_requested(session: Session, job_id: str) -> bool:

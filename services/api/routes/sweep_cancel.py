@@ -1,10 +1,10 @@
 """``POST /sweeps/{id}/cancel``: cancel every unfinished job of a sweep in one request.
 
-One write transaction: the sweep's queued and running jobs are listed, then each goes through
-the store's own job cancellation (``lifecycle.request_cancel``, what ``POST /jobs/{id}/cancel``
-calls): a queued job becomes ``cancelled`` at once, a running one gets ``cancel_requested`` and
-its worker stops after its current generation. Finished jobs are left as they are, so the
-request is idempotent: a repeat cancels nothing more and says so.
+One write transaction: the sweep's queued and running jobs are listed, then all go through the
+store's job cancellation at once (``lifecycle.request_cancels``, what ``POST /jobs/{id}/cancel``
+calls for one job): a queued job becomes ``cancelled`` at once, a running one gets
+``cancel_requested`` and its worker stops after its current generation. Finished jobs are left
+as they are, so the request is idempotent: a repeat cancels nothing more and says so.
 """
 
 from __future__ import annotations
@@ -79,24 +79,17 @@ def cancel_sweep(sweep_id: str, key: CurrentKey, ctx: Context) -> SweepCancelled
     finished jobs are left alone, so a repeat is harmless (``cancelled`` 0). Answers the
     sweep's counts afterwards and how many jobs were cancelled, are stopping, or had already
     finished."""
-    cancelled = stopping = 0
     with ctx.write() as session:
         sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
         if sweep is None:
             raise not_found("sweep", sweep_id)
-        for job_id in unfinished_job_ids(session, key.id, sweep.id):
-            job = lifecycle.request_cancel(session, job_id, owner_key_id=key.id)
-            if job is None:
-                continue
-            if job.status is JobStatus.CANCELLED:
-                cancelled += 1
-            elif not job.is_terminal:
-                stopping += 1
+        ids = unfinished_job_ids(session, key.id, sweep.id)
+        cancelled, stopping = lifecycle.request_cancels(session, ids, owner_key_id=key.id)
         counts = repo.count_jobs_by_status(session, owner_key_id=key.id, sweep_id=sweep.id)
     summary = SweepSummary.from_record(sweep, counts)
     return SweepCancelled(
         **summary.model_dump(),
-        cancelled=cancelled,
-        stopping=stopping,
-        already_finished=summary.n_jobs - cancelled - stopping,
+        cancelled=len(cancelled),
+        stopping=len(stopping),
+        already_finished=summary.n_jobs - len(cancelled) - len(stopping),
     )
