@@ -27,6 +27,9 @@ DEFAULT_URL = "http://127.0.0.1:8000"
 #: Attempts of a creating POST when the connection fails or the server answers 502/503/504
 #: (each attempt sends the same Idempotency-Key, so the resource is created once).
 CREATE_ATTEMPTS = 5
+#: A 429 whose ``Retry-After`` is at most this (s) is waited out and retried; a longer one
+#: (a quota: a slot frees in 30 s, the next hour) is the caller's to decide.
+MAX_RETRY_AFTER_S = 10.0
 _RETRY_STATUS = frozenset({502, 503, 504})
 _FULL_ID = re.compile(r"[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}", re.I)
 #: Page size when listing ids (the API's largest page).
@@ -41,11 +44,13 @@ def is_full_id(text: str) -> bool:
 
 
 class ApiError(Exception):
-    """An HTTP error answer: ``status`` code and the server's ``detail``."""
+    """An HTTP error answer: ``status`` code, the server's ``detail`` and its ``Retry-After``
+    (seconds; None when the answer has none)."""
 
-    def __init__(self, status: int, detail: Any) -> None:
+    def __init__(self, status: int, detail: Any, retry_after: float | None = None) -> None:
         self.status = status
         self.detail = detail
+        self.retry_after = retry_after
         super().__init__(f"HTTP {status}: {format_detail(detail)}")
 
 
@@ -101,7 +106,11 @@ class Client:
                 detail = resp.json().get("detail", resp.text)
             except ValueError:
                 detail = resp.text
-            raise ApiError(resp.status_code, detail)
+            try:
+                retry_after: float | None = float(resp.headers["Retry-After"])
+            except (KeyError, ValueError):
+                retry_after = None
+            raise ApiError(resp.status_code, detail, retry_after)
         return resp
 
     def get(self, path: str, **params: Any) -> Any:
@@ -112,8 +121,10 @@ class Client:
 
     def create(self, path: str, body: Any, *, idempotency_key: str | None = None) -> Any:
         """POST that creates a resource, retried when the request may or may not have reached
-        the server (connection errors, 502/503/504): every attempt carries the same
-        ``Idempotency-Key``, so the server creates it once and a retry returns it."""
+        the server (connection errors, timeouts, 502/503/504) or the server asks to come back
+        (429 with ``Retry-After``: e.g. the same request still being validated after a timed
+        out attempt): every attempt carries the same ``Idempotency-Key``, so the server creates
+        it once and a retry returns it."""
         headers = {"Idempotency-Key": idempotency_key or uuid.uuid4().hex}
         delay = 0.5
         for attempt in range(1, CREATE_ATTEMPTS + 1):
@@ -123,8 +134,12 @@ class Client:
                 if attempt == CREATE_ATTEMPTS:
                     raise
             except ApiError as exc:
-                if exc.status not in _RETRY_STATUS or attempt == CREATE_ATTEMPTS:
+                come_back = exc.status == 429 and 0 <= (exc.retry_after or -1) <= MAX_RETRY_AFTER_S
+                if not (come_back or exc.status in _RETRY_STATUS) or attempt == CREATE_ATTEMPTS:
                     raise
+                if come_back:
+                    time.sleep(float(exc.retry_after or 0.0))
+                    continue
             time.sleep(delay)
             delay = min(delay * 2, 5.0)
         raise AssertionError("unreachable")

@@ -240,3 +240,42 @@ def test_client_retry_after_a_lost_answer_creates_one_job(
     job = c.submit(_job())
     assert calls["n"] == 2 and len(sent) == 1 and sent[0] == job["id"]
     assert client.get(f"{API}/jobs", headers=alice).json()["total"] == 1
+
+
+def test_client_waits_out_a_short_429_and_not_a_quota(
+    client: TestClient, alice: dict[str, str], sent: list[str], monkeypatch: Any
+) -> None:
+    """A timed-out submission's retry finds the first attempt still being validated (429,
+    ``Retry-After: 1``): ``Client.submit`` waits and asks again with the same Idempotency-Key,
+    getting the one job. A 429 with a quota's ``Retry-After`` (30 s) is raised at once."""
+    import httpx
+
+    import services.client as C
+
+    inner = client._transport  # type: ignore[attr-defined]
+    waits: list[float] = []
+    monkeypatch.setattr(C.time, "sleep", waits.append)
+    answers = {"retry_after": "1", "n": 0}
+
+    class BusyFirst(httpx.BaseTransport):
+        def handle_request(self, request: httpx.Request) -> httpx.Response:
+            answers["n"] += 1
+            if answers["n"] == 1:
+                return httpx.Response(429, json={"detail": "validating"},
+                                      headers={"Retry-After": answers["retry_after"]})  # fmt: skip
+            return inner.handle_request(request)
+
+    c = C.Client("http://testserver", alice["X-API-Key"])
+    c.http = httpx.Client(
+        base_url="http://testserver/api/v1", headers=c.http.headers, transport=BusyFirst()
+    )
+    job = c.submit(_job())
+    assert waits == [1.0] and answers["n"] == 2 and sent == [job["id"]]
+    answers.update(retry_after="30", n=0)
+    try:
+        c.submit(_job({"seed": 5}))
+    except C.ApiError as exc:
+        assert exc.status == 429 and exc.retry_after == 30.0
+    else:
+        raise AssertionError("a quota's 429 must reach the caller")
+    assert answers["n"] == 1 and waits == [1.0]
