@@ -130,8 +130,8 @@ def run(
 
 def _record(result: Any, path: Path, fronts: dict[int, Any] | None = None) -> None:
     try:
+        from services.recording.writer import write_recording
         from services.store.settings import get_settings
-        from services.worker.rerun_writer import write_recording
     except ImportError:
         return
     try:
@@ -229,9 +229,10 @@ def keys_create(
 
     from services.embedded import ensure_database
     from services.store.keys import generate_api_key
-    from services.store.repository import create_api_key, now_utc
+    from services.store.repository import create_api_key
     from services.store.session import session_scope
     from services.store.settings import get_settings
+    from services.store.sql import now_utc
 
     ensure_database(get_settings())
     raw, key_hash = generate_api_key()

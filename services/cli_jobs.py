@@ -221,7 +221,7 @@ def replay(
     import signal
     import tempfile
 
-    from services.worker import rerun_replay
+    from services.recording import replay
 
     path = Path(target)
     scratch: tempfile.TemporaryDirectory[str] | None = None
@@ -253,7 +253,7 @@ def replay(
 
     signal.signal(signal.SIGTERM, _interrupt)  # a terminated replay also stops its viewer
     try:
-        handle = rerun_replay.open_viewer(path, web=True if web else None, port=port)
+        handle = replay.open_viewer(path, web=True if web else None, port=port)
         if handle.url:
             console.print(f"Rerun web viewer: {handle.url}  (Ctrl-C to stop)")
         try:

@@ -2,11 +2,11 @@
 
 :func:`record_run` turns a :class:`~legcore.runner.RunResult` (and :func:`record_motion` a single
 :class:`~legcore.studies.study.Motion`) into a :class:`RunRecording`: a flat list of items, each
-with its entity path, its timeline and its numbers. ``services.worker.rerun_writer`` — the only
+with its entity path, its timeline and its numbers. ``services.recording.writer`` — the only
 module that imports Rerun — logs them one archetype per item; nothing here knows about Rerun.
 
 Entity paths (``docs/recording.md`` has the full table). Items are named per joint, frame and
-link here; ``services.worker.rerun_writer`` logs several of them as one entity:
+link here; ``services.recording.writer`` logs several of them as one entity:
 
 - ``signals/<q|qd|qdd|jerk|tau|power>/<joint>`` — one scalar series per joint on the ``time``
   timeline (s); ``signals/energy/<joint>`` the cumulative ``∫|P_i| dt`` of that joint (J) and

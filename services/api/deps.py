@@ -31,9 +31,10 @@ from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT
 from services.store.artifacts import ArtifactStore
 from services.store.keys import hash_api_key
 from services.store.records import ApiKeyRecord
-from services.store.repository import get_api_key_by_hash, now_utc
+from services.store.repository import get_api_key_by_hash
 from services.store.session import engine_from_settings, make_session_factory, session_scope
 from services.store.settings import Settings
+from services.store.sql import now_utc
 
 log = logging.getLogger("legopt.api")
 
@@ -54,7 +55,7 @@ def default_enqueue(job_id: str) -> None:
 
 
 def _api_actor() -> str:
-    from services.worker.dispatcher import process_actor
+    from services.store.dispatcher import process_actor
 
     return process_actor("api")
 
@@ -104,7 +105,7 @@ class ApiContext:
         """Send the messages of committed jobs now (claimed in the database first). A job whose
         message cannot be sent (broker down) stays queued and due: the dispatcher sends it
         when the broker is back, so an accepted job is never lost."""
-        from services.worker.dispatcher import send_now
+        from services.store.dispatcher import send_now
 
         unsent = send_now(
             job_ids, self.enqueue, actor=self.actor, settings=self.settings,

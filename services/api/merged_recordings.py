@@ -41,7 +41,7 @@ _work = BoundedWork(
 _CHILD = (
     "import json, sys\n"
     "from pathlib import Path\n"
-    "from services.worker.rerun_merge import merge_recordings\n"
+    "from services.recording.merge import merge_recordings\n"
     "a = json.loads(sys.argv[1])\n"
     "merge_recordings([Path(p) for p in a['paths']], Path(a['out']), a['names'])\n"
 )

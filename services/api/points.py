@@ -111,7 +111,7 @@ def point_recording(ctx: ApiContext, job: JobRecord, k: int) -> ArtifactRecord:
     x = list(point.x or [])
 
     def decode(spec: Any) -> Any:
-        from services.worker.point_recording import decode_point
+        from services.recording.point import decode_point
 
         return decode_point(spec, x)
 
@@ -142,7 +142,7 @@ def baseline_recording(ctx: ApiContext, job: JobRecord, name: str) -> ArtifactRe
         return existing
 
     def decode(spec: Any) -> Any:
-        from services.worker.point_recording import decode_baseline
+        from services.recording.point import decode_baseline
 
         return decode_baseline(spec, name)
 
@@ -156,7 +156,7 @@ def _solution_recording(
     solution ``decode(spec)`` of a succeeded job, titled ``what``."""
 
     def make() -> ArtifactRecord:
-        from services.worker.point_recording import PointError, write_point_recording
+        from services.recording.point import PointError, write_point_recording
 
         with ctx.read() as session:
             done = repo.get_artifact(session, job.id, kind)
@@ -223,7 +223,7 @@ def front_metrics(ctx: ApiContext, job: JobRecord) -> dict[int, dict[str, Any] |
         return _read_front_metrics(ctx, existing)
 
     def make() -> dict[int, dict[str, Any] | None]:
-        from services.worker.point_recording import PointError, decode_point, prepare_cached
+        from services.recording.point import PointError, decode_point, prepare_cached
 
         with ctx.read() as session:
             done = repo.get_artifact(session, job.id, FRONT_METRICS)
@@ -298,7 +298,7 @@ def point_motion(
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {point}")
 
     def make() -> dict[str, Any]:
-        from services.worker.point_recording import (
+        from services.recording.point import (
             PointError,
             decode_baseline,
             decode_point,

@@ -428,7 +428,7 @@ def list_job_rows(
 
 
 def _job_record(row: Any) -> JobRecord:
-    from services.store.repository import to_record
+    from services.store.sql import to_record
 
     return to_record(JobRecord, row)
 

@@ -25,8 +25,7 @@ from sqlalchemy import ColumnElement, case, delete, func, literal, or_, select, 
 from sqlalchemy.orm import Session
 
 from services.store.events import add_events
-from services.store.lifecycle import insert_ignoring_duplicates
-from services.store.repository import now_utc, rowcount
+from services.store.sql import insert_ignoring_duplicates, now_utc, rowcount
 from services.store.tables import JOBS, SERVICE_LEASES, JobEventKind, JobStatus
 from services.store.types import UTCDateTime
 

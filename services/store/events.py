@@ -17,7 +17,7 @@ from sqlalchemy import func, insert, select
 from sqlalchemy.orm import Session
 
 from services.store.records import JobEventRecord
-from services.store.repository import fetch_all, now_utc
+from services.store.sql import fetch_all, now_utc
 from services.store.tables import JOB_EVENTS, JOBS, JobEventKind
 
 

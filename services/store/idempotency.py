@@ -17,7 +17,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from services.store.records import IdempotencyRecord
-from services.store.repository import fetch_one, insert_or_conflict, now_utc
+from services.store.sql import fetch_one, insert_or_conflict, now_utc
 from services.store.tables import IDEMPOTENCY_KEYS
 
 MAX_KEY_LENGTH = 200

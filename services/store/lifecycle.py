@@ -28,9 +28,8 @@ from collections.abc import Iterable, Sequence
 from datetime import datetime, timedelta
 from typing import Any
 
-from sqlalchemy import ColumnElement, Table, and_, case, func, insert, literal, select, update
+from sqlalchemy import ColumnElement, and_, case, func, insert, literal, select, update
 from sqlalchemy.dialects import postgresql, sqlite
-from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from services.store.errors import LeaseLostError
@@ -46,7 +45,8 @@ from services.store.records import (
     ReapReport,
     ResultIn,
 )
-from services.store.repository import fetch_one, get_job, now_utc, rowcount
+from services.store.repository import get_job
+from services.store.sql import fetch_one, insert_ignoring_duplicates, now_utc, rowcount
 from services.store.tables import (
     ARTIFACTS,
     BASELINES,
@@ -162,28 +162,6 @@ def renew_lease(
 
 
 # --------------------------------------------------------------------------- progress
-
-
-def insert_ignoring_duplicates(
-    session: Session, table: Table, values: dict[str, Any], keys: Sequence[str]
-) -> bool:
-    """INSERT unless a row with the same ``keys`` exists; True if a row was inserted."""
-    dialect = session.get_bind().dialect.name
-    if dialect in ("sqlite", "postgresql"):
-        module = sqlite if dialect == "sqlite" else postgresql
-        stmt = (
-            module.insert(table)
-            .values(**values)
-            .on_conflict_do_nothing(index_elements=keys)
-            .returning(table.c[keys[0]])
-        )
-        return session.execute(stmt).first() is not None
-    try:
-        with session.begin_nested():
-            session.execute(insert(table).values(**values))
-    except IntegrityError:
-        return False
-    return True
 
 
 def _finite_or_none(value: float | None) -> float | None:

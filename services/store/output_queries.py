@@ -18,7 +18,7 @@ from sqlalchemy.orm import Session
 
 from services.store.front_codec import decode_front_array
 from services.store.records import ParetoPointRecord
-from services.store.repository import fetch_all, fetch_one, now_utc
+from services.store.sql import fetch_all, fetch_one, insert_ignoring_duplicates, now_utc
 from services.store.tables import ARTIFACTS, GENERATIONS, JOBS, PARETO_POINTS, JobStatus
 
 
@@ -69,7 +69,6 @@ def add_artifact(
 ) -> bool:
     """Record a file made after the job finished (a point's recording); False if an artifact
     of this kind already exists (made by a concurrent request: keep the first)."""
-    from services.store.lifecycle import insert_ignoring_duplicates
 
     return insert_ignoring_duplicates(
         session,

@@ -26,10 +26,9 @@ from datetime import datetime, timedelta
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
-from services.store.lifecycle import insert_ignoring_duplicates
 from services.store.records import ApiKeyRecord
-from services.store.repository import now_utc, rowcount
 from services.store.settings import Settings
+from services.store.sql import insert_ignoring_duplicates, now_utc, rowcount
 from services.store.tables import API_KEYS, ARTIFACTS, JOBS, KEY_USAGE, JobStatus
 
 #: ``Retry-After`` of an active-jobs refusal (s): a slot frees when one of the key's jobs ends,

@@ -14,15 +14,13 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import fields
 from datetime import datetime, timedelta
-from typing import Any, TypeVar
+from typing import Any
 
-from sqlalchemy import ColumnElement, Select, Table, delete, func, insert, select, update
-from sqlalchemy.exc import IntegrityError
+from sqlalchemy import ColumnElement, Table, delete, func, insert, select, update
 from sqlalchemy.orm import Session
 
-from services.store.errors import ConflictError
+from services.store.events import add_events
 from services.store.front_codec import decode_front
 from services.store.id_prefix import owned_with_prefix
 from services.store.records import (
@@ -36,6 +34,19 @@ from services.store.records import (
     ResultRecord,
     RobotRecord,
     SweepRecord,
+)
+from services.store.robot_documents import by_reference, expand
+from services.store.specs import apply_overrides, json_size, spec_value
+from services.store.sql import (
+    MAX_PAGE_SIZE,
+    check_page,
+    fetch_all,
+    fetch_one,
+    fetch_page,
+    insert_or_conflict,
+    now_utc,
+    rowcount,
+    to_record,
 )
 from services.store.tables import (
     API_KEYS,
@@ -53,79 +64,7 @@ from services.store.tables import (
     RobotSource,
     new_id,
 )
-from services.store.types import as_utc, utcnow
-
-R = TypeVar("R")
-
-MAX_PAGE_SIZE = 1000
-
-# --------------------------------------------------------------------------- helpers
-
-
-def now_utc(now: datetime | None = None) -> datetime:
-    """``now`` converted to UTC (must be timezone-aware), or the current UTC time."""
-    return utcnow() if now is None else as_utc(now)
-
-
-def to_record(cls: type[R], row: Mapping[Any, Any]) -> R:
-    """Build the frozen record ``cls`` from a row mapping, deep-copying JSON values."""
-    values = {}
-    for f in fields(cls):  # type: ignore[arg-type]
-        value = row[f.name]
-        if isinstance(value, dict | list):
-            value = copy.deepcopy(value)
-        values[f.name] = value
-    return cls(**values)
-
-
-def fetch_one(session: Session, cls: type[R], stmt: Select[Any]) -> R | None:
-    """First row of ``stmt`` as a record, or None."""
-    row = session.execute(stmt).mappings().first()
-    return None if row is None else to_record(cls, row)
-
-
-def fetch_all(session: Session, cls: type[R], stmt: Select[Any]) -> tuple[R, ...]:
-    """All rows of ``stmt`` as records."""
-    return tuple(to_record(cls, row) for row in session.execute(stmt).mappings())
-
-
-def rowcount(result: Any) -> int:
-    """Rows matched by an UPDATE or DELETE result."""
-    return int(result.rowcount)
-
-
-def _check_page(limit: int, offset: int) -> None:
-    if not 1 <= limit <= MAX_PAGE_SIZE:
-        raise ValueError(f"limit must be in [1, {MAX_PAGE_SIZE}], got {limit}")
-    if offset < 0:
-        raise ValueError(f"offset must be >= 0, got {offset}")
-
-
-def fetch_page(
-    session: Session,
-    cls: type[R],
-    stmt: Select[Any],
-    order_by: Iterable[ColumnElement[Any]],
-    limit: int,
-    offset: int,
-) -> Page[R]:
-    """One page of ``stmt`` (ordered by ``order_by``) with the total count of its rows."""
-    _check_page(limit, offset)
-    total = session.execute(select(func.count()).select_from(stmt.subquery())).scalar_one()
-    items = fetch_all(session, cls, stmt.order_by(*order_by).limit(limit).offset(offset))
-    return Page(items=items, total=int(total), limit=limit, offset=offset)
-
-
-def insert_or_conflict(session: Session, table: Table, values: dict[str, Any], what: str) -> None:
-    """INSERT one row inside a SAVEPOINT; a unique violation raises ``ConflictError``.
-
-    The savepoint keeps the caller's transaction usable after the conflict.
-    """
-    try:
-        with session.begin_nested():
-            session.execute(insert(table).values(**values))
-    except IntegrityError as exc:
-        raise ConflictError(what) from exc
+from services.store.types import as_utc
 
 
 def _owned(table: Table, owner_key_id: str | None) -> list[ColumnElement[bool]]:
@@ -286,7 +225,6 @@ def create_sweep(
 ) -> SweepRecord:
     """Store a sweep; create its jobs with ``create_job(..., sweep_id=sweep.id)`` in the same
     ``session_scope`` so the sweep and its jobs appear together."""
-    from services.store.robot_documents import by_reference
 
     sweep_id = new_id()
     session.execute(
@@ -385,9 +323,6 @@ def create_jobs(
     is stored once by content and referred to (``services.store.robot_documents``);
     ``spec_bytes`` counts the whole spec, robot included.
     """
-    from services.store.events import add_events
-    from services.store.robot_documents import by_reference
-    from services.store.specs import json_size
 
     if (specs is None) == (overrides is None):
         raise ValueError("give either specs or overrides")
@@ -431,7 +366,6 @@ def create_jobs(
 def job_labels(session: Session, jobs: Iterable[JobRecord]) -> dict[str, dict[str, Any]]:
     """``{job_id: {"name": ..., "problem": {"kind": ...}}}``: the spec fields a listing shows,
     read for the jobs of sweeps from their sweep's base and overrides without building specs."""
-    from services.store.specs import spec_value
 
     jobs = list(jobs)
     sweep_ids = {j.sweep_id for j in jobs if j.spec is None and j.sweep_id is not None}
@@ -456,11 +390,9 @@ def job_labels(session: Session, jobs: Iterable[JobRecord]) -> dict[str, dict[st
 def job_spec(session: Session, job: JobRecord) -> Any:
     """The spec document of a job: its own, or its sweep's base with its overrides applied;
     its robot document in place of the stored reference."""
-    from services.store.robot_documents import expand
 
     if job.spec is not None or job.sweep_id is None:
         return copy.deepcopy(expand(session, job.spec))
-    from services.store.specs import apply_overrides
 
     base = session.execute(
         select(SWEEPS.c.base_spec).where(SWEEPS.c.id == job.sweep_id)
@@ -470,7 +402,6 @@ def job_spec(session: Session, job: JobRecord) -> Any:
 
 def sweep_base_spec(session: Session, sweep: SweepRecord) -> Any:
     """A sweep's base spec with its robot document in place of the stored reference."""
-    from services.store.robot_documents import expand
 
     return copy.deepcopy(expand(session, sweep.base_spec))
 
@@ -544,7 +475,7 @@ def list_generations(
     session: Session, job_id: str, *, after: int | None = None, limit: int = MAX_PAGE_SIZE
 ) -> tuple[GenerationRecord, ...]:
     """Generation rows of a job in order; ``after`` returns only later generations (polling)."""
-    _check_page(limit, 0)
+    check_page(limit, 0)
     stmt = select(GENERATIONS).where(GENERATIONS.c.job_id == job_id)
     if after is not None:
         stmt = stmt.where(GENERATIONS.c.generation > after)
@@ -615,7 +546,6 @@ def get_artifact(session: Session, job_id: str, kind: str) -> ArtifactRecord | N
 
 
 __all__ = [
-    "MAX_PAGE_SIZE",
     "count_jobs_by_status",
     "create_api_key",
     "create_job",

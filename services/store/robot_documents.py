@@ -25,6 +25,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from services.store.sql import insert_ignoring_duplicates
 from services.store.tables import ROBOT_DOCUMENTS
 from services.store.types import utcnow
 
@@ -44,8 +45,6 @@ def is_reference(robot: Any) -> bool:
 
 def store_document(session: Session, doc: dict[str, Any]) -> str:
     """Store ``doc`` unless a row with its content exists; its SHA-256 (hex)."""
-    from services.store.lifecycle import insert_ignoring_duplicates
-
     raw = canonical_json(doc)
     sha = hashlib.sha256(raw).hexdigest()
     values = {"sha256": sha, "spec": doc, "size_bytes": len(raw), "created_at": utcnow()}

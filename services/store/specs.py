@@ -1,8 +1,8 @@
 """Job spec documents as stored: a sweep's jobs keep only their overrides of the sweep's base.
 
 ``apply_overrides(base, overrides)`` is the one way to turn them back into a job's spec; the
-API expands sweeps with the same ``with_overrides`` (``services.api.sweeps``), so a stored job
-reads back exactly the spec that was validated at submission.
+API expands sweeps with the same ``with_overrides`` (:mod:`services.store.spec_paths`), so a
+stored job reads back exactly the spec that was validated at submission.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import json
 from collections.abc import Mapping
 from typing import Any
 
-from services.api.sweeps import with_overrides
+from services.store.spec_paths import get_path, with_overrides
 
 
 def apply_overrides(base: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:
@@ -24,8 +24,6 @@ def apply_overrides(base: Mapping[str, Any], overrides: Mapping[str, Any]) -> di
 def spec_value(base: Any, overrides: Mapping[str, Any] | None, path: str) -> Any:
     """The value at dotted ``path`` of ``base`` with ``overrides`` applied, without copying the
     base (for listings: a job's name or study kind). None when absent."""
-    from services.api.sweeps import get_path
-
     overrides = overrides or {}
     segments = path.split(".")
     for depth in range(len(segments), 0, -1):  # the longest overridden prefix wins

@@ -61,7 +61,7 @@ def _fetch(url: str, target: Path) -> None:
 
 
 def _extract(target: Path) -> None:
-    from services.worker.rerun_replay import rerun_binary
+    from services.recording.replay import rerun_binary
 
     port, grpc = _free_port(), _free_port()
     cmd = [rerun_binary(), "--serve-web", "--bind", "127.0.0.1", "--web-viewer-port", str(port),

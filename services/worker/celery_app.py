@@ -10,7 +10,7 @@ Results live in the database, so there is no result backend.
 Long CPU-bound tasks: ``acks_late`` + ``reject_on_worker_lost`` (a killed worker's message is
 redelivered), prefetch 1, a visibility timeout above the hard time limit (Redis), and the
 worker is started with ``REMAP_SIGTERM=SIGQUIT`` so a stopped container hands its job back.
-Brokers are not trusted for recovery: the elected dispatcher (``services.worker.dispatcher``)
+Brokers are not trusted for recovery: the elected dispatcher (``services.store.dispatcher``)
 requeues jobs whose lease expired and re-sends lost messages, and the lease makes a duplicate
 delivery harmless.
 """
@@ -91,31 +91,6 @@ def make_celery(settings: Settings | None = None) -> Celery:
 
 
 app = make_celery()
-
-
-_DISPATCHER: list[object] = []
-
-
-@signals.worker_ready.connect
-def _start_dispatcher(**_: object) -> None:
-    """Every worker process also runs a dispatcher thread; the database elects one active at a
-    time (recovery never waits on the broker). It runs in the worker's main process: the
-    engine's lock is fork-safe (``services.store.session``), so a prefork child forked while
-    it works starts clean."""
-    from services.worker.dispatcher import Dispatcher
-    from services.worker.tasks import enqueue, queue_depth
-
-    dispatcher = Dispatcher(enqueue, queue_depth)
-    dispatcher.start()
-    _DISPATCHER.append(dispatcher)
-
-
-@signals.worker_shutdown.connect
-def _stop_dispatcher(**_: object) -> None:
-    """Release the dispatcher role at a clean shutdown so another worker takes it at once."""
-    while _DISPATCHER:
-        dispatcher = _DISPATCHER.pop()
-        dispatcher.stop()  # type: ignore[attr-defined]
 
 
 EMBEDDED_PREFORK_REFUSED = (

@@ -411,7 +411,7 @@ def _write_recording(
     what the recording could not draw (e.g. a mesh outside the installed robot-description
     packages and the configured roots, which is never read) is appended to ``warnings``."""
     try:
-        from services.worker.rerun_writer import write_recording
+        from services.recording.writer import write_recording
     except ImportError as exc:
         return f"recording skipped: {exc}"
     try:

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import logging
 
+from celery import signals
+
+from services.store.dispatcher import Dispatcher
 from services.worker.celery_app import QUEUE, app
 from services.worker.execute import run_payload
 
@@ -21,7 +24,7 @@ def run_job(job_id: str) -> dict[str, str]:
 
 def enqueue(job_id: str) -> None:
     """Send job ``job_id``'s message to the workers. Call it only through
-    ``services.worker.dispatcher`` (``send_now`` / the dispatcher), which claims the send in
+    ``services.store.dispatcher`` (``send_now`` / the dispatcher), which claims the send in
     the database first."""
     run_job.apply_async(args=[job_id], retry=True, retry_policy={"max_retries": 2})
 
@@ -36,3 +39,25 @@ def queue_depth() -> int | None:
     except Exception as exc:
         log.debug("queue depth unavailable: %s", exc)
         return None
+
+
+_DISPATCHER: list[Dispatcher] = []
+
+
+@signals.worker_ready.connect
+def _start_dispatcher(**_: object) -> None:
+    """Every worker process also runs a dispatcher thread; the database elects one active at a
+    time (recovery never waits on the broker). It runs in the worker's main process: the
+    engine's lock is fork-safe (``services.store.session``), so a prefork child forked while
+    it works starts clean."""
+    dispatcher = Dispatcher(enqueue, queue_depth)
+    dispatcher.start()
+    _DISPATCHER.append(dispatcher)
+
+
+@signals.worker_shutdown.connect
+def _stop_dispatcher(**_: object) -> None:
+    """Release the dispatcher role at a clean shutdown so another worker takes it at once."""
+    while _DISPATCHER:
+        dispatcher = _DISPATCHER.pop()
+        dispatcher.stop()

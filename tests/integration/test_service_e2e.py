@@ -12,9 +12,9 @@ import yaml
 from sqlalchemy import func, select
 
 from services.client import TERMINAL, ApiError
+from services.recording.blueprint import read_entities
 from services.store.session import make_engine, session_scope
 from services.store.tables import GENERATIONS, JOBS, PARETO_POINTS, RESULTS
-from services.worker.rerun_blueprint import read_entities
 from tests.integration.stack import ROOT, Stack
 from tests.patience import Patience
 

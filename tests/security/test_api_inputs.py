@@ -29,11 +29,12 @@ from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.api.body_limit import DEFAULT_MAX_BODY_BYTES
 from services.api.deps import ApiContext
-from services.api.sweeps import expand, set_path
+from services.api.sweeps import expand
 from services.api.validation import check_job_spec
 from services.store.keys import generate_api_key
 from services.store.repository import create_api_key
 from services.store.settings import Settings
+from services.store.spec_paths import set_path
 
 API = "/api/v1"
 JSON = {"content-type": "application/json"}
@@ -385,7 +386,7 @@ def test_points_share_the_base_instead_of_copying_it() -> None:
 
 
 def test_copy_on_write_equals_set_path_on_a_deep_copy() -> None:
-    from services.api.sweeps import with_overrides
+    from services.store.spec_paths import with_overrides
 
     rng = random.Random(8)
     base: dict[str, Any] = {

@@ -68,7 +68,7 @@ def _key(ctx: ApiContext, name: str) -> tuple[dict[str, str], str]:
 
 def _real_recording(tmp: Path) -> bytes:
     """A small valid .rrd (the merged sweep recording reads it back)."""
-    from services.worker.rerun_writer import write_recording
+    from services.recording.writer import write_recording
     from tests.recording_fixtures import arm_motion, fake_result
 
     path = tmp / "job.rrd"

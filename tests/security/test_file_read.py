@@ -141,8 +141,8 @@ def test_recording_embeds_no_named_file(tmp_path: Path, monkeypatch: pytest.Monk
     from legcore.kinematics import fk
     from legcore.robots import build_robot
     from legcore.studies.study import Motion
-    from services.worker import rerun_blueprint as B
-    from services.worker import rerun_writer as W
+    from services.recording import blueprint as B
+    from services.recording import writer as W
     from tests.recording_fixtures import fake_result
 
     names, tokens = attack_names(tmp_path)
@@ -167,8 +167,8 @@ def test_a_mesh_inside_the_mesh_roots_is_recorded(tmp_path: Path) -> None:
     from legcore.kinematics import fk
     from legcore.robots import build_robot
     from legcore.studies.study import Motion
-    from services.worker import rerun_blueprint as B
-    from services.worker import rerun_writer as W
+    from services.recording import blueprint as B
+    from services.recording import writer as W
     from tests.recording_fixtures import fake_result
 
     root = tmp_path / "pkg"

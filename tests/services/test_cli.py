@@ -131,7 +131,7 @@ def test_replay_downloads_into_a_temporary_file_and_a_free_port(
     import contextlib
 
     from services import cli_jobs
-    from services.worker import rerun_replay
+    from services.recording import replay
 
     seen: dict[str, Any] = {}
 
@@ -154,7 +154,7 @@ def test_replay_downloads_into_a_temporary_file_and_a_free_port(
 
     monkeypatch.setattr(cli_jobs, "client", lambda *a: contextlib.nullcontext(FakeClient()))
     monkeypatch.setattr(cli_jobs, "resolve_id", lambda c, t: ("job", "0" * 8 + "-full"))
-    monkeypatch.setattr(rerun_replay, "open_viewer", open_viewer)
+    monkeypatch.setattr(replay, "open_viewer", open_viewer)
     monkeypatch.chdir(tmp_path)
     res = runner.invoke(app, ["replay", "00000000", "--web"])
     assert res.exit_code == 0, res.output

@@ -15,7 +15,7 @@ from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.quotas import usage
 from services.store.records import ApiKeyRecord
-from services.store.repository import now_utc
+from services.store.sql import now_utc
 from services.store.tables import KeyRole
 
 router = APIRouter(tags=["keys"])

@@ -197,7 +197,7 @@ def test_point_motion_and_recording_are_made_once(env: dict[str, Any]) -> None:
     assert art.relative_path.rsplit("/", 1)[0] == result.relative_path.rsplit("/", 1)[0]
     again = client.get(url, headers=alice)
     assert again.content == first.content  # served from the artifact store
-    from services.worker.rerun_blueprint import read_entities
+    from services.recording.blueprint import read_entities
 
     rrd = Path(ctx.settings.data_dir) / "point.rrd"
     rrd.write_bytes(first.content)
@@ -339,13 +339,13 @@ def test_front_points_carry_their_metrics_decoded_once(env: dict[str, Any]) -> N
     assert art is not None and art.relative_path.endswith(".json")
 
     # served from the artifact afterwards: no decoding
-    from services.worker import point_recording
+    from services.recording import point
 
     def no_decode(*_a: Any, **_k: Any) -> Any:
         raise AssertionError("the front's metrics were decoded again")
 
     mp = pytest.MonkeyPatch()
-    mp.setattr(point_recording, "decode_point", no_decode)
+    mp.setattr(point, "decode_point", no_decode)
     try:
         again = client.get(f"{API}/jobs/{env['job']}/front", headers=alice).json()
         r = client.get(f"{API}/jobs/{env['job']}/front/export?format=csv", headers=alice)

@@ -291,7 +291,7 @@ def test_broker_down_at_submit_keeps_the_job_queued_and_due(
     """An accepted job is never lost: with the broker down the job stays queued and due, and
     the dispatcher sends it once the broker answers (before: cancelled with a 503)."""
     from services.api.app import create_app
-    from services.worker.dispatcher import dispatch_pass
+    from services.store.dispatcher import dispatch_pass
 
     def broken(_job_id: str) -> None:
         raise ConnectionError("broker down")

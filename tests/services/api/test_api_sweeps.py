@@ -14,7 +14,8 @@ from legcore.robots import Robot, catalog
 from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.api.deps import ApiContext
-from services.api.sweeps import SweepError, count_points, expand, get_path, set_path
+from services.api.sweeps import SweepError, count_points, expand
+from services.store.spec_paths import get_path, set_path
 
 API = "/api/v1"
 KINDS = sorted(studies())

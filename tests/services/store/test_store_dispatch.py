@@ -1,6 +1,6 @@
 """Dispatch outbox, elected dispatcher and the audit trail (issue 8, defects 2, 7 and 11).
 
-Each test drives ``services.worker.dispatcher.dispatch_pass`` with a fake broker (a list of
+Each test drives ``services.store.dispatcher.dispatch_pass`` with a fake broker (a list of
 sent ids and a queue depth) on SQLite and PostgreSQL, with a simulated clock.
 """
 
@@ -14,11 +14,11 @@ from sqlalchemy import Engine
 
 from services.store import claim_job, create_api_key, create_job, session_scope
 from services.store.dispatch import claim_sends, lead_holder, try_lead
+from services.store.dispatcher import dispatch_pass, send_now
 from services.store.events import count_events, list_events
 from services.store.session import make_session_factory
 from services.store.settings import Settings
 from services.store.tables import JobEventKind
-from services.worker.dispatcher import dispatch_pass, send_now
 
 T0 = datetime(2026, 11, 23, 12, 0, 0, tzinfo=UTC)
 LEASE = 4.0

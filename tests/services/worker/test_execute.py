@@ -20,9 +20,9 @@ from services.store.lifecycle import (
     requeue_expired,
     save_checkpoint,
 )
-from services.store.repository import now_utc
 from services.store.session import session_scope
 from services.store.settings import Settings
+from services.store.sql import now_utc
 from services.worker import execute
 
 SPEC: dict[str, Any] = {
@@ -58,12 +58,12 @@ def test_unrunnable_spec_fails_with_the_field_and_the_worker_survives(settings: 
 def test_a_failing_recording_is_a_warning_not_a_failure(
     settings: Settings, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from services.worker import rerun_writer
+    from services.recording import writer
 
     def broken(*_: Any, **__: Any) -> None:
         raise OSError("disk full")
 
-    monkeypatch.setattr(rerun_writer, "write_recording", broken)
+    monkeypatch.setattr(writer, "write_recording", broken)
     job_id = _job({**SPEC, "record": True})
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
     job = _get(job_id)

@@ -64,7 +64,7 @@ def test_a_cancel_seen_by_the_progress_write_stops_the_job(
 def test_the_recording_gets_its_fronts_from_memory(
     settings: Settings, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from services.worker import rerun_writer
+    from services.recording import writer
 
     seen: dict[str, Any] = {}
 
@@ -78,7 +78,7 @@ def test_the_recording_gets_its_fronts_from_memory(
     def no_read_back(*_: Any, **__: Any) -> Any:
         raise AssertionError("the worker holds the fronts: no read-back")
 
-    monkeypatch.setattr(rerun_writer, "write_recording", fake_write)
+    monkeypatch.setattr(writer, "write_recording", fake_write)
     monkeypatch.setattr(repo, "list_generations", no_read_back)
     job_id = _job({**SPEC, "record": True})
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"

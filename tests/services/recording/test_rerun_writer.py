@@ -1,4 +1,4 @@
-"""services.worker.rerun_writer: .rrd files read back with the Rerun SDK's own reader."""
+"""services.recording.writer: .rrd files read back with the Rerun SDK's own reader."""
 
 from __future__ import annotations
 
@@ -22,10 +22,10 @@ from legcore import recording as R
 from legcore.kinematics import frames
 from legcore.robots import catalog
 from legcore.studies.study import Box, Motion
-from services.worker import rerun_blueprint as B
-from services.worker import rerun_merge as M
-from services.worker import rerun_replay as RP
-from services.worker import rerun_writer as W
+from services.recording import blueprint as B
+from services.recording import merge as M
+from services.recording import replay as RP
+from services.recording import writer as W
 from tests.patience import Patience
 from tests.recording_fixtures import arm_motion, fake_result
 

@@ -12,7 +12,7 @@ from rerun.chunk import RrdReader
 from legcore.recording import (
     RunRecording,
 )
-from services.worker.rerun_layout import baseline_signals, robot_skeleton
+from services.recording.layout import baseline_signals, robot_skeleton
 
 if TYPE_CHECKING:
     pass

@@ -12,8 +12,8 @@ import pytest
 from legcore.kinematics import fk
 from legcore.robots import build_robot
 from legcore.studies.study import Motion
-from services.worker import rerun_blueprint as B
-from services.worker import rerun_writer as W
+from services.recording import blueprint as B
+from services.recording import writer as W
 from tests.recording_fixtures import fake_result
 
 OBJ = """v 0 0 0

@@ -149,8 +149,8 @@ def write_point_recording(
     job's baselines, ``history`` (the stored per-generation rows) and ``fronts`` (per-generation
     objective vectors) or the final front ``pareto`` (``[{x, objectives}]``); ``title`` names
     it. Returns the writer's notes (what it could not draw)."""
+    from services.recording.writer import write_recording
     from services.store.settings import get_settings
-    from services.worker.rerun_writer import write_recording
 
     prepared = decoded.prepared
     problem = prepared.problem

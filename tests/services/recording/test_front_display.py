@@ -11,9 +11,9 @@ import numpy as np
 import pyarrow as pa
 from rerun.chunk import RrdReader
 
-from services.worker import rerun_merge as M
-from services.worker import rerun_writer as W
-from services.worker.front_display import front_display
+from services.recording import merge as M
+from services.recording import writer as W
+from services.recording.front_display import front_display
 from tests.recording_fixtures import arm_motion, fake_result
 
 
@@ -84,7 +84,7 @@ def test_merged_recording_colours_and_boxes_jobs_together(tmp_path: Path) -> Non
 def test_merged_jobs_never_share_a_colour() -> None:
     """Up to 32 jobs merge into one recording; each keeps its own colour and legend name."""
     from services.api.routes.sweeps import MAX_MERGED_JOBS
-    from services.worker.rerun_merge import job_color
+    from services.recording.merge import job_color
 
     colours = [job_color(i) for i in range(MAX_MERGED_JOBS)]
     assert len({rgb for rgb, _ in colours}) == MAX_MERGED_JOBS

@@ -6,7 +6,7 @@ would be a flat line. The front's points keep their true values (hovering one sh
 what changes is how they are drawn: each front entity gets a static ``Transform3D`` that maps
 the box ``lo .. hi`` of the objectives to the unit square (cube), and axis lines with the
 objective's name and unit and tick labels with true values are drawn in the same box.
-Pure numpy: the writer (``rerun_writer``) turns it into archetypes.
+Pure numpy: the writer (``services.recording.writer``) turns it into archetypes.
 """
 
 from __future__ import annotations

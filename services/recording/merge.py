@@ -12,9 +12,9 @@ import rerun as rr
 from rerun.chunk import RrdReader
 
 from legcore import recording as lrec
-from services.worker.front_display import FrontDisplay, front_display
-from services.worker.rerun_blueprint import blueprint_for, read_entities
-from services.worker.rerun_writer import _box_transform, _log_axes, _write_atomic
+from services.recording.blueprint import blueprint_for, read_entities
+from services.recording.front_display import FrontDisplay, front_display
+from services.recording.writer import _box_transform, _log_axes, _write_atomic
 
 if TYPE_CHECKING:
     pass

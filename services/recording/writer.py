@@ -1,11 +1,11 @@
-"""Rerun recordings of jobs: write a job's ``.rrd`` file. With ``rerun_layout`` (which items
-share an entity), ``rerun_blueprint`` (the views), ``rerun_merge`` and ``rerun_replay``, the
+"""Rerun recordings of jobs: write a job's ``.rrd`` file. With ``layout`` (which items
+share an entity), ``blueprint`` (the views), ``merge`` and ``replay``, the
 only modules importing rerun.
 
     write_recording(result, path, recording_id=job_id)   # one job  -> path (.rrd)
-    rerun_merge.merge_recordings([a, b], out, names=["a", "b"])   # a sweep -> out, /jobs/<name>/
-    rerun_replay.open_viewer(path)                        # native viewer, or the web viewer
-    rerun_replay.serve_web(path, port)                    # web viewer on 127.0.0.1:port
+    merge.merge_recordings([a, b], out, names=["a", "b"])   # a sweep -> out, /jobs/<name>/
+    replay.open_viewer(path)                        # native viewer, or the web viewer
+    replay.serve_web(path, port)                    # web viewer on 127.0.0.1:port
 
 What is logged where is decided by the pure :mod:`legcore.recording` (``docs/recording.md``);
 this module turns its items into archetypes:
@@ -24,7 +24,7 @@ this module turns its items into archetypes:
   partitioned by generation, drawn in the front's own box (a static ``Transform3D`` maps its
   span to the unit square; values stay true) with named, ticked axes (``optimization/axes``)
   and the final front also static (``optimization/final_front``), so the Pareto view shows it
-  on the ``time`` timeline too (:mod:`services.worker.front_display`); a merged recording
+  on the ``time`` timeline too (:mod:`services.recording.front_display`); a merged recording
   gives each job its colour and name, one box for all fronts and a legend (``jobs/legend``).
 
 Each job gets its own ``RecordingStream`` (never the global one: several jobs may run in one
@@ -65,9 +65,9 @@ from legcore.recording import (
     Series,
     record_run,
 )
-from services.worker.front_display import FrontDisplay, front_display
-from services.worker.rerun_blueprint import blueprint_for
-from services.worker.rerun_layout import baseline_signals, robot_skeleton, series_groups
+from services.recording.blueprint import blueprint_for
+from services.recording.front_display import FrontDisplay, front_display
+from services.recording.layout import baseline_signals, robot_skeleton, series_groups
 
 if TYPE_CHECKING:
     from legcore.robots.legged import LeggedRobot

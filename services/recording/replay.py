@@ -25,8 +25,8 @@ import rerun.blueprint as rrb
 import rerun_bindings
 from rerun.chunk import RrdReader
 
-from services.worker.rerun_blueprint import blueprint_for, read_entities
-from services.worker.rerun_writer import APP_ID, _with_default_blueprint, release_streams
+from services.recording.blueprint import blueprint_for, read_entities
+from services.recording.writer import APP_ID, _with_default_blueprint, release_streams
 
 if TYPE_CHECKING:
     pass

@@ -2,7 +2,8 @@
 
 rerun-sdk 0.41 keeps every Python-created ``RecordingStream`` (its batcher thread, its stream
 thread, its buffers) until an explicit sweep, and the blueprint stream behind
-``save(default_blueprint=...)`` is never freed at all (see ``rerun_writer.release_streams``).
+``save(default_blueprint=...)`` is never freed at all (see
+``services.recording.writer.release_streams``).
 Before the fix a worker gained 4 threads and ~2.2 MB per ``write_recording`` and the API ~3.4 MB
 per ``merge_recordings``; after it, 0 threads and < 0.1 MB per recording over 200 recordings
 (allocator warm-up, flattening with more recordings).
@@ -30,8 +31,8 @@ _CHILD = r"""
 import gc, json, os, sys, tempfile
 from pathlib import Path
 from tests.recording_fixtures import arm_motion, fake_result
-from services.worker import rerun_writer as W
-from services.worker import rerun_merge as M
+from services.recording import writer as W
+from services.recording import merge as M
 
 def threads():
     return len(os.listdir("/proc/self/task"))
