@@ -10,9 +10,9 @@ from fastapi.testclient import TestClient
 from typer.testing import CliRunner
 
 from legcore.studies.registry import studies
-from services import cli_jobs
 from services.api.deps import ApiContext
 from services.cli import app as cli_app
+from services.cli import jobs as cli_jobs
 from services.client import Client
 from services.store import repository as repo
 from services.store.events import list_events

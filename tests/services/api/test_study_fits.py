@@ -58,7 +58,7 @@ def cli(client: TestClient, alice: dict[str, str],
         c.http = TestClient(client.app, base_url="http://testserver/api/v1", headers=alice)
         return c
 
-    for module in ("services.cli_studies", "services.cli_robots"):
+    for module in ("services.cli.studies", "services.cli.robots"):
         monkeypatch.setattr(f"{module}.client", make)
     yield CliRunner()
 

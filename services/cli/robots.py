@@ -21,7 +21,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from services.cli_common import KeyOpt, UrlOpt, api_call, bad_input, client, console
+from services.cli.common import KeyOpt, UrlOpt, api_call, bad_input, client, console
 from services.spec_files import read_urdf_file, robot_name_from
 
 __all__ = ["parse_legs", "parse_locked_joints", "robot_spec_from_file", "robots_app"]

@@ -13,7 +13,7 @@ from typing import Annotated, Any
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from services.cli_common import (
+from services.cli.common import (
     KeyOpt,
     UrlOpt,
     api_call,
@@ -23,14 +23,14 @@ from services.cli_common import (
     load_spec_file,
     resolve_id,
 )
-from services.cli_views import job_block, job_title, jobs_table, short, sweep_table
-from services.display import (
+from services.cli.display import (
     ResultView,
     best_text,
     full_tables,
     objective_names_for,
     summary_block,
 )
+from services.cli.views import job_block, job_title, jobs_table, short, sweep_table
 
 __all__ = ["follow", "print_job_result", "short", "sweep_cancelled_text"]
 

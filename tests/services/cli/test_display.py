@@ -1,4 +1,4 @@
-"""What the CLI prints about a result (services/display.py, legcore/studies/metric_names.py,
+"""What the CLI prints about a result (services/cli/display.py, legcore/studies/metric_names.py,
 examples/papers/paper_numbers.yaml): 4 significant digits, maximised quantities positive, no
 repeated metric, readable names, the paper's numbers beside ours."""
 
@@ -16,10 +16,10 @@ from legcore.studies.metric_names import (
     joint_row_name,
     metric_name,
 )
-from services.display import ResultView, best_text, fmt, full_tables, summary_block
+from services.cli.display import ResultView, best_text, fmt, full_tables, summary_block
 from services.paper_numbers import paper_entry
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _text(*renderables: object) -> str:
@@ -145,7 +145,7 @@ def _gait(feasible: bool, start_feasible: bool, *, task: bool = True) -> ResultV
 
 
 def test_an_infeasible_optimum_is_announced_with_each_violation() -> None:
-    from services.display_verdict import verdict_line
+    from services.cli.display_verdict import verdict_line
 
     view = _gait(feasible=False, start_feasible=True)
     text = _text(summary_block(view, title="walk", spec={"problem": {"kind": "quadruped_gait"}}))
@@ -230,8 +230,8 @@ def test_paper_numbers_only_on_the_papers_robot() -> None:
 
 
 def test_status_marks_an_infeasible_job_in_red(monkeypatch: pytest.MonkeyPatch) -> None:
-    from services import cli_views
-    from services.cli_views import job_block, jobs_table, status_text
+    from services.cli import views as cli_views
+    from services.cli.views import job_block, jobs_table, status_text
 
     # (the objective names, without building the study's default problem)
     monkeypatch.setattr(cli_views, "objective_names_for", lambda _spec: ["energy_per_metre"])
@@ -254,7 +254,7 @@ def test_status_marks_an_infeasible_job_in_red(monkeypatch: pytest.MonkeyPatch) 
 def test_the_gap_to_the_physical_minimum_is_a_line_of_the_block() -> None:
     """Issue 19: a single-objective result states how far it is from the best its problem
     allows (path_tracking: TOPP-RA), or why it has no such reference."""
-    from services.display_verdict import gap_line
+    from services.cli.display_verdict import gap_line
 
     gap = {"objective": "time", "value": 3.3914, "reference": 3.3602,
            "kind": "physical minimum", "method": "TOPP-RA on 2000 intervals", "pct": 0.9286}

@@ -1,4 +1,4 @@
-"""The verdict and the task in the CLI's result blocks (:mod:`services.display`): the
+"""The verdict and the task in the CLI's result blocks (:mod:`services.cli.display`): the
 ``INFEASIBLE: …`` line, the rules that derived the task from the robot, why a change in % is
 withheld, a solution's feasibility as a table cell."""
 

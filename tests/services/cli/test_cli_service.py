@@ -20,7 +20,7 @@ from services.cli import app
 from tests.integration.stack import Stack, embedded_stack
 from tests.patience import Patience
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 runner = CliRunner()
 
 pytestmark = pytest.mark.integration

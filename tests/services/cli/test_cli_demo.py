@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 EXAMPLES = ["000_swing_energy_flat.yaml", "004_path_tracking_energy_time.yaml"]
 
 pytestmark = pytest.mark.integration

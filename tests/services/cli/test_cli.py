@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from services.cli import app
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 runner = CliRunner()
 
 
@@ -130,7 +130,7 @@ def test_replay_downloads_into_a_temporary_file_and_a_free_port(
     goes to a temporary file, removed when the viewer stops) and asks for a free port (0)."""
     import contextlib
 
-    from services import cli_jobs
+    from services.cli import jobs as cli_jobs
     from services.recording import replay
 
     seen: dict[str, Any] = {}

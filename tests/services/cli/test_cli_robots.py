@@ -11,7 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from services.cli import app
-from services.cli_robots import parse_legs, parse_locked_joints
+from services.cli.robots import parse_legs, parse_locked_joints
 from services.spec_files import inline_robot_files
 from tests.integration.stack import Stack
 
@@ -85,7 +85,7 @@ def test_a_spec_names_its_urdf_file(tmp_path: Path) -> None:
 
 
 def test_legopt_run_and_submit_read_the_urdf_file_of_a_spec(tmp_path: Path) -> None:
-    from services.cli_common import load_spec_file
+    from services.cli.common import load_spec_file
 
     (tmp_path / "leg.urdf").write_text(LEG)
     spec = tmp_path / "job.yaml"

@@ -2,7 +2,7 @@
 
 The demo starts `legopt serve` (API + worker processes, SQLite and the filesystem broker under
 the data directory), submits ``examples/<glob>``, shows a progress bar per job, prints one
-compact block per study (:func:`services.display.summary_block`; ``--verbose`` adds the full
+compact block per study (:func:`services.cli.display.summary_block`; ``--verbose`` adds the full
 tables), says where to look next, and stops the service. The jobs stay in the data directory:
 a later `legopt serve` shows them again.
 """
@@ -20,7 +20,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from services.cli_common import (
+from services.cli.common import (
     api_call,
     app,
     bad_input,
@@ -29,7 +29,7 @@ from services.cli_common import (
     free_port,
     load_spec_file,
 )
-from services.cli_jobs import follow, print_job_result, short
+from services.cli.jobs import follow, print_job_result, short
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: The port `legopt serve` listens on by default (what the "next" lines refer to).

@@ -1,23 +1,15 @@
-"""The `legopt` command line.
+"""The `legopt` verbs that work on this machine without a service: run, db, serve, worker, keys.
 
     legopt run SPEC.yaml --out DIR     run one job in-process, print it, write DIR/result.json
     legopt db upgrade                  create / migrate the database (Alembic)
     legopt serve                       API + N worker processes on the embedded default
     legopt worker                      one Celery worker process
-    legopt demo                        start the embedded service, submit the example studies
-    legopt submit | status | results | cancel | sweep | replay   talk to a running service
     legopt keys create | list | revoke API keys of the local database
-
-The commands that talk to a service live in `services/cli_jobs.py`, the demo in
-`services/cli_demo.py`, what they share in `services/cli_common.py`, what they print in
-`services/display.py`. Exit codes: 0 success, 1 the job failed, 2 bad input (the message names
-the field).
 """
 
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -26,33 +18,17 @@ from pydantic import ValidationError
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from services.cli_common import (
-    KeyOpt,
-    UrlOpt,
-    api_call,
+from services.cli.common import (
     app,
     bad_input,
-    client,
     console,
     err_console,
     load_spec_file,
     validation_lines,
 )
-from services.display import ResultView, best_text, full_tables, summary_block
+from services.cli.display import ResultView, best_text, full_tables, summary_block
 
-__all__ = [
-    "KeyOpt",
-    "UrlOpt",
-    "api_call",
-    "app",
-    "bad_input",
-    "client",
-    "console",
-    "err_console",
-    "load_spec_file",
-    "print_result",
-    "validation_lines",
-]
+__all__ = ["print_result"]
 
 db_app = typer.Typer(help="Database schema (Alembic).", no_args_is_help=True)
 app.add_typer(db_app, name="db")
@@ -278,23 +254,3 @@ def keys_revoke(key_id: Annotated[str, typer.Argument(help="id of the key (keys 
             raise bad_input(f"key_id: no API key {key_id!r} (see `legopt keys list`)")
         revoked = revoke_api_key(s, key_id)
     console.print(f"revoked {key_id}" if revoked else f"{key_id} was already revoked")
-
-
-# The commands that talk to a service, then the demo (listed after the local ones in --help).
-import services.cli_jobs  # noqa: E402, F401, I001
-import services.cli_demo  # noqa: E402, F401
-from services.cli_robots import robots_app  # noqa: E402
-
-app.add_typer(robots_app, name="robots")
-from services.cli_export import export_app  # noqa: E402
-
-app.add_typer(export_app, name="export")
-import services.cli_studies  # noqa: E402, F401
-
-
-def main() -> None:  # pragma: no cover - console script entry
-    app()
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(app())

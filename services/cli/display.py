@@ -37,7 +37,7 @@ from legcore.studies.metric_names import (
     joint_row_name,
     metric_name,
 )
-from services.display_verdict import (
+from services.cli.display_verdict import (
     change_withheld,
     gap_line,
     task_line,

@@ -10,7 +10,7 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from services.display import best_text, fmt, objective_names_for
+from services.cli.display import best_text, fmt, objective_names_for
 from services.verdict import violations_text
 
 __all__ = [

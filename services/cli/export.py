@@ -17,7 +17,7 @@ from typing import Annotated, Any
 
 import typer
 
-from services.cli_common import KeyOpt, UrlOpt, api_call, client, console, resolve_id
+from services.cli.common import KeyOpt, UrlOpt, api_call, client, console, resolve_id
 
 export_app = typer.Typer(
     help="Download the job list, a job's front or history, or a sweep's cells (CSV, JSON, "

@@ -16,7 +16,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from services.cli_common import KeyOpt, UrlOpt, api_call, app, client, console
+from services.cli.common import KeyOpt, UrlOpt, api_call, app, client, console
 
 __all__ = ["studies"]
 
