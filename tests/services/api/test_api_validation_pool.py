@@ -75,11 +75,14 @@ def _error(response: Any) -> dict[str, Any]:
 
 
 @pytest.fixture
-def impatient(settings: Settings) -> Iterator[tuple[TestClient, dict[str, str]]]:
-    """An app whose validations may run 1 s at most, and an API key's headers."""
+def impatient(settings: Settings) -> Iterator[tuple[TestClient, TestClient, dict[str, str]]]:
+    """An app whose validations may run 1 s at most, a patient app over the same store and the
+    same validation processes (the next request must work, however busy the machine), and an
+    API key's headers."""
     app = create_app(settings.with_overrides(validation_timeout_s=1.0), enqueue=lambda _j: None)
-    with TestClient(app) as c:
-        yield c, {"X-API-Key": new_key(app.state.context, "alice")[0]}
+    patient = create_app(settings, enqueue=lambda _j: None)
+    with TestClient(app) as c, TestClient(patient) as p:
+        yield c, p, {"X-API-Key": new_key(app.state.context, "alice")[0]}
 
 
 # --------------------------------------------------------------------------- tests
@@ -109,16 +112,18 @@ def test_a_crashing_child_is_a_422_and_the_next_request_works(
 
 
 def test_an_overrunning_child_is_killed_a_422_and_the_next_request_works(
-    impatient: tuple[TestClient, dict[str, str]], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+    impatient: tuple[TestClient, TestClient, dict[str, str]],
+    monkeypatch: pytest.MonkeyPatch,
+    tmp_path: Path,
 ) -> None:
-    slow_client, alice = impatient
+    slow_client, patient_client, alice = impatient
     never = functools.partial(_blocking, str(tmp_path / "started"), str(tmp_path / "never"))
     with monkeypatch.context() as patch:
         patch.setattr(validation_pool, "_check_job", never)
         err = _error(slow_client.post(f"{API}/jobs", json=JOB, headers=alice))
     assert err["loc"] == ["body", "robot"] and err["type"] == "model_not_validated", err
     assert "longer than 1 s" in err["msg"]
-    r = slow_client.post(f"{API}/jobs", json=JOB, headers=alice)
+    r = patient_client.post(f"{API}/jobs", json=JOB, headers=alice)
     assert r.status_code == 202, r.text
 
 
