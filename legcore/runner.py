@@ -153,6 +153,9 @@ class RunResult:
     start: dict[str, Any] | None = None
     task: Task | None = None
     gap: dict[str, Any] | None = None
+    #: Position of the reported optimum on ``pareto`` (None when it is not on the front: a
+    #: refined optimum, or an older result).
+    best_index: int | None = None
 
     @property
     def feasible(self) -> bool:
@@ -163,7 +166,8 @@ class RunResult:
         """``result.json``: spec, status, feasible and the optimum's violations, the task (the
         robot-relative parameters and their rules), best, pareto, baselines, history, extras,
         optimizer, start (what the optimiser earned: `legcore.earned`), gap (to the best the
-        problem allows: `legcore.optimality_gap`)."""
+        problem allows: `legcore.optimality_gap`), best_index (the optimum's place on the
+        front, or None)."""
         return _jsonable(
             {
                 "spec": self.spec.model_dump(mode="json"),
@@ -174,6 +178,7 @@ class RunResult:
                 "objective_names": list(self.objective_names),
                 "best": self.best.summary(),
                 "pareto": self.pareto,
+                "best_index": self.best_index,
                 "baselines": {k: v.summary() for k, v in self.baselines.items()},
                 "history": self.history,
                 "extras": self.extras,
@@ -194,6 +199,9 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
 
         result, refined = refine_result(problem, result, prepared.spec.optimizer.refine_max_iter)
     best = checked(problem, problem.solution(np.asarray(result.x)))
+    on_front = np.flatnonzero(
+        np.all(np.asarray(result.front_X) == np.asarray(result.x)[None, :], axis=1)
+    ) if len(result.front_X) else np.empty(0, dtype=int)
     pareto = [
         {"x": [float(v) for v in x], "objectives": [float(v) for v in f]}
         for x, f in zip(result.front_X, result.front_F, strict=True)
@@ -203,6 +211,7 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         status="succeeded",
         best=best,
         pareto=pareto,
+        best_index=int(on_front[0]) if on_front.size else None,
         baselines={k: checked(problem, v) for k, v in problem.baseline_solutions().items()},
         history=[r.to_dict() for r in result.history],
         extras=problem.extras(np.asarray(result.front_X), np.asarray(result.front_F)),

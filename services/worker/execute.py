@@ -387,6 +387,8 @@ def _store_attempt(
                     "task": doc.get("task"),
                     # how far the optimum is from the best the problem allows (issue 19)
                     "gap": doc.get("gap"),
+                    # the optimum's place on the front (None: not on it, e.g. refined)
+                    "best_index": doc.get("best_index"),
                 },
                 # the verdict, on the job row (GET /jobs, the jobs page, exports)
                 feasible=doc.get("feasible"),

@@ -59,3 +59,13 @@ def test_budget_tolerance_stops_early_and_sizes_are_estimated() -> None:
     size = job_size(prepare({**QUICK, "budget": {"ftol": 1e-3}}))  # no limit: the seed's budget
     assert size.generations == studies()["quadruped_gait"].default_generations
     assert size.work == size.population * size.generations * size.samples
+
+
+@pytest.mark.parametrize("optimizer", ["ga", "nsga2"])
+def test_the_optimum_knows_its_place_on_the_front(optimizer: str) -> None:
+    """``best_index`` is the front point that is the reported optimum (stored by the worker,
+    so the dashboard never guesses it by distance)."""
+    r = legcore.run({**QUICK, "optimizer": {"kind": optimizer}, "seed": 2})
+    doc = r.to_dict()
+    assert doc["best_index"] is not None
+    assert doc["pareto"][doc["best_index"]]["x"] == pytest.approx(doc["best"]["x"])

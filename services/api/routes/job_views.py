@@ -11,19 +11,9 @@ from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 
-from services.api.dashboard_schemas import (
-    BaselineMark,
-    FrontOut,
-    FrontPointOut,
-    MotionOut,
-    PaperMark,
-    PaperOut,
-    PaperValue,
-    Quantity,
-    finite_or_none,
-    quantities,
-)
+from services.api.dashboard_schemas import FrontOut, MotionOut
 from services.api.deps import ApiContext, Context, CurrentKey
+from services.api.front_view import front_out
 from services.api.points import (
     baseline_recording,
     point_metrics,
@@ -31,7 +21,7 @@ from services.api.points import (
     point_recording,
 )
 from services.api.routes.jobs import owned_job
-from services.api.schemas import ErrorOut, objective_names
+from services.api.schemas import ErrorOut
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.errors import ArtifactError
@@ -100,97 +90,8 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
         baselines = repo.list_baselines(session, job.id)
         ref = oq.get_hypervolume_ref(session, job.id)
         spec = repo.job_spec(session, job)
-    problem = spec.get("problem") if isinstance(spec, dict) else None
-    kind = problem.get("kind") if isinstance(problem, dict) else None
-    objectives = result.objectives if result is not None else None
-    names = objective_names(objectives)
-    if not names and points:
-        names = [f"f{i + 1}" for i in range(len(points[0].objectives or []))]
-    n_var = max((len(p.x or []) for p in points), default=0)
-    best_index = None
-    if result is not None and points and isinstance(objectives, dict):
-        target = [finite_or_none((objectives.get("values") or {}).get(n)) for n in names]
-        if all(v is not None for v in target):
-            dist = [
-                sum(
-                    (float(a or 0) - float(b or 0)) ** 2
-                    for a, b in zip(p.objectives, target, strict=False)
-                )
-                for p in points
-            ]
-            best_index = points[dist.index(min(dist))].index
-    marks = [BaselineMark.from_record(b, names) for b in baselines]
-    objective_quantities = quantities(names, kind)
     per_point, state, note = point_metrics(ctx, job, bool(points))
-    # the result's order (as the job's metric table), then any only the points have
-    keys = dict.fromkeys(result.metrics or {}) if result is not None else {}
-    keys.update(dict.fromkeys(k for v in per_point.values() if v for k in v))
-    metrics = list(keys)
-    return FrontOut(
-        job_id=job.id,
-        status=job.status,
-        objectives=objective_quantities,
-        variables=[
-            Quantity(name=f"x{i + 1}", label=f"x{i + 1}", unit="", axis=f"x{i + 1}")
-            for i in range(n_var)
-        ],
-        metrics=quantities(metrics, kind),
-        points=[
-            FrontPointOut(
-                index=p.index,
-                objectives=[finite_or_none(v) for v in p.objectives or []],
-                x=[finite_or_none(v) for v in p.x or []],
-                metrics=per_point.get(p.index),
-            )
-            for p in points
-        ],
-        point_metrics=state,
-        point_metrics_note=note,
-        best_index=best_index,
-        baselines=marks,
-        hypervolume_ref=ref,
-        paper=paper_numbers(spec, objective_quantities, kind, _task(result)),
-    )
-
-
-def _task(result: Any) -> Any:
-    """The task a job ran (stored in its result's summary), or None."""
-    summary = getattr(result, "summary", None)
-    return summary.get("task") if isinstance(summary, dict) else None
-
-
-def paper_numbers(
-    spec: Any, objectives: list[Quantity], kind: str | None, task: Any = None
-) -> PaperOut | None:
-    """The paper's numbers for the job's case — only on the paper's robot with the paper's
-    settings (``task``: the task the job ran, when known): per metric its start and optimum,
-    and on the front its start / optimum where it printed every objective (none when an
-    objective is maximised: the front holds what the optimiser minimises)."""
-    from services.paper_numbers import paper_entry
-
-    entry = paper_entry(spec if isinstance(spec, dict) else None, task)
-    if entry is None:
-        return None
-    rows = {r.metric: r for r in entry.rows}
-    metrics = {
-        r.metric: PaperValue(
-            symbol=r.symbol(kind),
-            start=r.start,
-            optimum=r.optimum,
-            note=" ".join(r.note.split()),
-        )
-        for r in entry.rows
-        if r.start is not None or r.optimum is not None
-    }
-    names = [q.name for q in objectives]
-    senses = [q.sense for q in objectives]
-    marks = []
-    for label, pick in (("paper's start", "start"), ("paper's optimum", "optimum")):
-        values = [getattr(rows[n], pick) if n in rows else None for n in names]
-        numbers = [float(v) for v in values if v is not None]
-        if names and "max" not in senses and len(numbers) == len(names):
-            marks.append(PaperMark(label=label, objectives=numbers))
-    return PaperOut(source=entry.source, marks=marks, metrics=metrics)
+    return front_out(job, spec, points, result, baselines, ref, (per_point, state, note))
 
 
 @router.get(

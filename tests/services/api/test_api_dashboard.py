@@ -139,6 +139,12 @@ def test_front_has_named_objectives_baselines_and_hypervolume(env: dict[str, Any
     assert [o["unit"] for o in front["objectives"]] == ["s", "J"]
     assert [o["axis"] for o in front["objectives"]][0] == "cycle time [s]"
     assert front["points"] and front["best_index"] is not None
+    # the reported optimum's place as the worker stored it: that point is the optimum itself
+    with env["ctx"].read() as s:
+        result = repo.get_result(s, env["job"])
+    assert result is not None and front["best_index"] == result.summary["best_index"]
+    best = next(p for p in front["points"] if p["index"] == front["best_index"])
+    assert best["x"] == pytest.approx(result.best_x)
     assert {b["name"] for b in front["baselines"]} == {"time_optimal", "seed", "seed_max_V"}
     # the physical minimum (TOPP-RA) is a marked point, faster than every front point
     fastest = min(p["objectives"][0] for p in front["points"])
@@ -306,7 +312,7 @@ def test_job_tags_are_listed_and_filter_the_jobs(env: dict[str, Any]) -> None:
 def test_paper_solution_is_marked_where_every_objective_was_printed() -> None:
     """Seed 002's paper solution a has all three objectives: one mark on the 3-D front."""
     from services.api.dashboard_schemas import quantities
-    from services.api.routes.job_views import paper_numbers
+    from services.api.front_view import paper_numbers
 
     names = ["f1_beta1", "f2_beta5", "f3_perimeter"]
     kind = "hexapod_workspace"
