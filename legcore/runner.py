@@ -8,6 +8,7 @@ call. Both produce the same :class:`RunResult` for the same spec and seed.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -69,16 +70,34 @@ class Prepared:
         return Run(self.problem, self.algorithm, self.termination, seed=self.spec.seed, state=state)
 
 
-def prepare(spec: JobSpec | dict[str, Any]) -> Prepared:
+def prepare(
+    spec: JobSpec | dict[str, Any],
+    *,
+    robot: Robot | LeggedRobot | None = None,
+    build_problem: Callable[[Study, Robot | LeggedRobot, Any], StudyProblem] | None = None,
+) -> Prepared:
     """Validate ``spec`` and build robot, problem, algorithm and termination.
+
+    Injection points, for a caller that builds many jobs (the API's validation reuses what one
+    request built already): ``robot``, the job's robot built already (None: the spec's catalog
+    name, inline robot or the study's default robot, built here; a given robot the study
+    refuses is a ``ValueError`` at ``robot``), and ``build_problem(study, robot, problem_spec)``
+    (default ``study.build(robot, problem_spec)``).
 
     Raises pydantic ``ValidationError`` or ``ValueError`` (message starting with the field) for
     a spec that cannot run.
     """
     spec = parse_job_spec(spec)
     study = get_study(spec.problem.kind)
-    robot = resolve_robot(spec, study)
-    return assemble(spec, study, robot, study.build(robot, spec.problem))
+    if robot is None:
+        robot = resolve_robot(spec, study)
+    elif (reason := study.refusal(robot)) is not None:
+        raise ValueError(f"robot: {reason}")
+    if build_problem is None:
+        problem = study.build(robot, spec.problem)
+    else:
+        problem = build_problem(study, robot, spec.problem)
+    return assemble(spec, study, robot, problem)
 
 
 def assemble(

@@ -16,9 +16,9 @@ by identity; this module keys those subtrees by content without re-reading them:
   budget), and failures of each of these, so N points sharing a bad part fail N times for the
   price of one.
 
-``prepare_with`` is ``legcore.runner.prepare`` taking the robot and study problem already
-built. Validation is also bounded: the builds of one request may parse at most
-``MAX_BUILD_CHARS`` characters of URDF / path CSV text (a few CPU seconds).
+``problem_builder`` hands ``legcore.runner.prepare`` the study problems a request built
+already (its ``build_problem``). Validation is also bounded: the builds of one request may
+parse at most ``MAX_BUILD_CHARS`` characters of URDF / path CSV text (a few CPU seconds).
 
 A ``SpecCache`` lives in the ``cache`` mapping the caller passes to ``check_job_spec`` (one per
 request); nothing here outlives the request or is shared between API keys.
@@ -32,11 +32,9 @@ from collections.abc import Callable, MutableMapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from legcore import runner
-from legcore.jobspec import JobSpec
 from legcore.robots import LeggedRobot, Robot, build_any_robot
-from legcore.runner import JobSize, Prepared
-from legcore.studies.registry import get_study
+from legcore.runner import JobSize
+from legcore.studies.study import Study, StudyProblem
 from services.api.errors import invalid
 from services.lru import BuiltCache
 
@@ -151,25 +149,19 @@ class SpecCache:
         return found
 
 
-def prepare_with(
-    spec: JobSpec,
-    robot: Robot | LeggedRobot | None,
-    problems: dict[tuple[str, str], Any],
-    problem_key: tuple[str, str],
-) -> Prepared:
-    """What ``legcore.runner.prepare(spec)`` builds, with the robot given (None: resolve the
-    catalog name or the study's default as ``prepare`` does) and the study problem taken from
-    ``problems[problem_key]`` when this request built it already. Kept equal to ``prepare`` by
-    ``tests/security/test_api_inputs.py::test_cached_prepare_matches_legcore_prepare``."""
-    study = get_study(spec.problem.kind)
-    if robot is None:
-        robot = runner.resolve_robot(spec, study)
-    elif (reason := study.refusal(robot)) is not None:
-        raise ValueError(f"robot: {reason}")
-    problem = problems.get(problem_key)
-    if problem is None:
-        problem = problems[problem_key] = study.build(robot, spec.problem)
-    return runner.assemble(spec, study, robot, problem)
+def problem_builder(
+    problems: dict[tuple[str, str], Any], problem_key: tuple[str, str]
+) -> Callable[[Study, Robot | LeggedRobot, Any], StudyProblem]:
+    """``build_problem`` for ``legcore.runner.prepare``: the study problem of ``problem_key``
+    from ``problems`` when this request built it already, else built and kept there."""
+
+    def build(study: Study, robot: Robot | LeggedRobot, problem_spec: Any) -> StudyProblem:
+        found = problems.get(problem_key)
+        if found is None:
+            found = problems[problem_key] = study.build(robot, problem_spec)
+        return found
+
+    return build
 
 
 #: Robots ``build_robot_cached`` keeps (a 1.7 MB URDF model is a few MB in memory).
@@ -196,6 +188,6 @@ __all__ = [
     "SpecCache",
     "build_robot_cached",
     "content_key",
-    "prepare_with",
+    "problem_builder",
     "robot_kind",
 ]

@@ -21,7 +21,7 @@ from pydantic import ValidationError
 from legcore.jobspec import JobSpec, parse_job_spec, spec_error_locations
 from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog, parse_robot_spec
 from legcore.robots.capabilities import capabilities
-from legcore.runner import JobSize, job_size
+from legcore.runner import JobSize, job_size, prepare
 from legcore.studies.registry import plugin_errors
 from services.api.errors import (
     Loc,
@@ -33,7 +33,7 @@ from services.api.errors import (
     split_field_message,
     validation_error,
 )
-from services.api.spec_cache import BuiltRobot, SpecCache, prepare_with
+from services.api.spec_cache import BuiltRobot, SpecCache, problem_builder
 from services.store.settings import Settings
 
 log = logging.getLogger("legopt.api")
@@ -396,7 +396,7 @@ def _prepare_and_size(
     """``legcore.runner.prepare`` + ``job_size`` reusing an already built robot and study
     problem; errors as 422s located under ``prefix``."""
     try:
-        prepared = prepare_with(spec, robot, problems, problem_key)
+        prepared = prepare(spec, robot=robot, build_problem=problem_builder(problems, problem_key))
         size = job_size(prepared)
     except ValidationError as exc:
         raise validation_error(_job_errors(exc, doc, prefix)) from None
