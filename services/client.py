@@ -30,6 +30,10 @@ CREATE_ATTEMPTS = 5
 #: A 429 whose ``Retry-After`` is at most this (s) is waited out and retried; a longer one
 #: (a quota: a slot frees in 30 s, the next hour) is the caller's to decide.
 MAX_RETRY_AFTER_S = 10.0
+#: How long (s) a creating POST keeps coming back when the server asks it to (429 with a short
+#: ``Retry-After``: its earlier attempt is still being validated, which on a busy machine can
+#: take a while); counted apart from ``CREATE_ATTEMPTS``.
+COME_BACK_WINDOW_S = 180.0
 _RETRY_STATUS = frozenset({502, 503, 504})
 _FULL_ID = re.compile(r"[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}", re.I)
 #: Page size when listing ids (the API's largest page).
@@ -127,23 +131,27 @@ class Client:
         it once and a retry returns it."""
         headers = {"Idempotency-Key": idempotency_key or uuid.uuid4().hex}
         delay = 0.5
-        for attempt in range(1, CREATE_ATTEMPTS + 1):
+        failures = 0
+        come_back_until = time.monotonic() + COME_BACK_WINDOW_S
+        while True:
             try:
                 return self._req("POST", path, json=body, headers=headers).json()
             except httpx.TransportError:
-                if attempt == CREATE_ATTEMPTS:
+                failures += 1
+                if failures >= CREATE_ATTEMPTS:
                     raise
             except ApiError as exc:
-                come_back = exc.status == 429 and 0 <= (exc.retry_after or -1) <= MAX_RETRY_AFTER_S
-                if not (come_back or exc.status in _RETRY_STATUS) or attempt == CREATE_ATTEMPTS:
-                    raise
-                if come_back:
-                    time.sleep(float(exc.retry_after or 0.0))
+                wait = exc.retry_after if exc.retry_after is not None else -1.0
+                if exc.status == 429 and 0 <= wait <= MAX_RETRY_AFTER_S:
+                    if time.monotonic() + wait > come_back_until:
+                        raise
+                    time.sleep(wait)
                     continue
+                failures += 1
+                if exc.status not in _RETRY_STATUS or failures >= CREATE_ATTEMPTS:
+                    raise
             time.sleep(delay)
             delay = min(delay * 2, 5.0)
-        raise AssertionError("unreachable")
-
     # ------------------------------------------------------------------ endpoints
     def health(self) -> dict[str, Any]:
         return dict(self.get("/health"))

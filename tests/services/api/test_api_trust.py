@@ -271,6 +271,26 @@ def test_client_waits_out_a_short_429_and_not_a_quota(
     )
     job = c.submit(_job())
     assert waits == [1.0] and answers["n"] == 2 and sent == [job["id"]]
+    # a validation slower than a few Retry-Afters (a busy machine): it keeps coming back
+    busy = {"left": C.CREATE_ATTEMPTS + 3}
+
+    class BusyLong(httpx.BaseTransport):
+        def handle_request(self, request: httpx.Request) -> httpx.Response:
+            if busy["left"] > 0:
+                busy["left"] -= 1
+                return httpx.Response(429, json={"detail": "validating"},
+                                      headers={"Retry-After": "2"})  # fmt: skip
+            return inner.handle_request(request)
+
+    c.http = httpx.Client(
+        base_url="http://testserver/api/v1", headers=c.http.headers, transport=BusyLong()
+    )
+    again = c.submit(_job({"seed": 6}))
+    assert waits[1:] == [2.0] * (C.CREATE_ATTEMPTS + 3) and sent[-1] == again["id"]
+    del waits[1:]
+    c.http = httpx.Client(
+        base_url="http://testserver/api/v1", headers=c.http.headers, transport=BusyFirst()
+    )
     answers.update(retry_after="30", n=0)
     try:
         c.submit(_job({"seed": 5}))
