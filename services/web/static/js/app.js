@@ -1,14 +1,22 @@
 // The dashboard's shell: log in with an API key, then route #/jobs, #/job/ID, #/sweeps,
 // #/sweep/ID, #/robots, #/robot/ID to their pages. Every page returns a cleanup function
 // (stops its polling) that runs when the user navigates away.
-import { api, clearKey, getKey, setKey, whenUnauthorized } from "./api.js";
-import { clear, errorBox, h } from "./ui.js";
+import { api, ApiError, clearKey, getKey, setKey, whenUnauthorized } from "./api.js";
+import { clear, errorBox, errorText, h } from "./ui.js";
 import * as jobs from "./pages/jobs.js";
 import * as job from "./pages/job.js";
 import * as sweeps from "./pages/sweeps.js";
 import * as sweep from "./pages/sweep.js";
 import * as robots from "./pages/robots.js";
 
+/** @typedef {import("./api_types").UsageOut} UsageOut */
+/**
+ * A page: render(main, the route's parameter, the whole hash) draws it into `main` and may
+ * answer a cleanup function (stops its polling).
+ * @typedef {{ render(main: HTMLElement, param: string, hash: string): Promise<(() => void) | void> }} Page
+ */
+
+/** @type {Array<[RegExp, Page, string]>} hash pattern, page, the nav link to mark */
 const ROUTES = [
   [/^#\/jobs(?:\?(.*))?$/, jobs, "jobs"],
   [/^#\/job\/([\w-]+)$/, job, "jobs"],
@@ -18,8 +26,11 @@ const ROUTES = [
   [/^#\/robot\/([\w.-]+)$/, robots, "robots"],
 ];
 
-const main = document.getElementById("app");
+const main = /** @type {HTMLElement} */ (document.getElementById("app"));
+/** @type {(() => void) | null} */
 let cleanup = null;
+/** @param {string} id an element of index.html */
+const byId = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
 async function route() {
   if (cleanup) { try { cleanup(); } catch (_) { /* page gone */ } cleanup = null; }
@@ -28,7 +39,7 @@ async function route() {
   for (const [re, page, nav] of ROUTES) {
     const m = re.exec(hash);
     if (!m) continue;
-    for (const a of document.querySelectorAll("[data-nav]")) {
+    for (const a of /** @type {NodeListOf<HTMLElement>} */ (document.querySelectorAll("[data-nav]"))) {
       a.classList.toggle("active", a.dataset.nav === nav);
     }
     clear(main);
@@ -43,39 +54,43 @@ async function route() {
 }
 
 function showLogin(message = "") {
-  const dialog = document.getElementById("login");
-  document.getElementById("login-error").textContent = message;
-  document.getElementById("who").textContent = "";
-  document.getElementById("logout").hidden = true;
+  const dialog = /** @type {HTMLDialogElement} */ (byId("login"));
+  byId("login-error").textContent = message;
+  byId("who").textContent = "";
+  byId("logout").hidden = true;
   clear(main).append(h("p.muted", "Log in with your API key to see your jobs."));
   if (!dialog.open) dialog.showModal();
 }
 
+/** @param {string} key */
 async function login(key) {
   setKey(key);
   try {
+    /** @type {UsageOut} */
     const me = await api("/keys/me");
-    document.getElementById("login").close();
+    /** @type {HTMLDialogElement} */ (byId("login")).close();
     showWho(me);
     await route();
   } catch (err) {
     clearKey();
-    showLogin(err.status === 401 ? "This key is not valid." : err.message);
+    showLogin(err instanceof ApiError && err.status === 401 ? "This key is not valid." : errorText(err));
   }
 }
 
+/** @param {UsageOut} me */
 function showWho(me) {
+  /** @type {Partial<UsageOut["key"]>} */
   const k = me.key || {};
-  document.getElementById("who").textContent = `${k.name || "key"} (${k.role || "user"})`;
-  document.getElementById("logout").hidden = false;
+  byId("who").textContent = `${k.name || "key"} (${k.role || "user"})`;
+  byId("logout").hidden = false;
 }
 
-document.getElementById("login-form").addEventListener("submit", (ev) => {
+byId("login-form").addEventListener("submit", (ev) => {
   ev.preventDefault();
-  login(document.getElementById("login-key").value.trim());
+  login(/** @type {HTMLInputElement} */ (byId("login-key")).value.trim());
 });
-document.getElementById("login").addEventListener("cancel", (ev) => ev.preventDefault());
-document.getElementById("logout").addEventListener("click", () => {
+byId("login").addEventListener("cancel", (ev) => ev.preventDefault());
+byId("logout").addEventListener("click", () => {
   clearKey();
   showLogin();
 });

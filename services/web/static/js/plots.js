@@ -3,6 +3,22 @@
 // signals of one solution, and fronts of several sweep cells overlaid.
 import { axis } from "./ui.js";
 
+/** @typedef {import("./api_types").FrontOut} FrontOut */
+/** @typedef {import("./api_types").GenerationOut} GenerationOut */
+/** @typedef {import("./api_types").MotionOut} MotionOut */
+/** @typedef {import("./api_types").Quantity} Quantity */
+/** @typedef {import("./api_types").SweepFrontsOut} SweepFrontsOut */
+/**
+ * A solution picked on the front plot (or in the front table): a point or a baseline.
+ * @typedef {{ kind: "point", index: number } | { kind: "baseline", name: string }} Selection
+ */
+/**
+ * One job of a sweep cell's fronts (GET /sweeps/{id}/fronts: `cells[].jobs[]`, which the
+ * API's schema leaves untyped): its final front's objective vectors.
+ * @typedef {{ job_id: string, seed: unknown, points: number[][] }} CellFrontJob
+ */
+/** A plotly.js trace or layout (what the dashboard passes; plotly.js checks it). @typedef {Record<string, unknown>} PlotSpec */
+
 const Plotly = window.Plotly;
 const CONFIG = { responsive: true, displaylogo: false };
 export const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
@@ -10,17 +26,30 @@ export const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#
 const LAYOUT = { margin: { l: 64, r: 16, t: 30, b: 50 }, hovermode: "closest",
   legend: { orientation: "h", y: -0.2 } };
 
+/**
+ * Free the plot in `el` (if plotly.js drew one there).
+ * @param {(HTMLElement & { data?: unknown }) | null | undefined} el
+ */
 export function purge(el) { if (el && el.data) Plotly.purge(el); }
 
-/** The front of `front` (GET /jobs/{id}/front) into `el`; `onPick({kind, index|name})`. */
+/**
+ * The front of `front` (GET /jobs/{id}/front) into `el`; `onPick({kind, index|name})`.
+ * @param {HTMLElement} el
+ * @param {FrontOut} front
+ * @param {(sel: Selection) => void} onPick called with the point or baseline clicked
+ * @param {Selection | null} [selected] the one to ring
+ */
 export function frontPlot(el, front, onPick, selected = null) {
   const m = front.objectives.length;
   const pts = front.points;
+  /** @param {number} j */
   const col = (j) => pts.map((p) => p.objectives[j]);
   const text = pts.map((p) => `point ${p.index}`);
+  /** @type {PlotSpec[]} */
   const traces = [];
   const three = m >= 3;
   const base = three ? { type: "scatter3d" } : { type: "scatter" };
+  /** @param {(j: number) => unknown[]} get the values of objective j */
   const xyz = (get) => (three ? { x: get(0), y: get(1), z: get(2) } : { x: get(0), y: m > 1 ? get(1) : get(0).map(() => 0) });
   traces.push({ ...base, ...xyz(col), mode: "markers", name: "front", text,
     customdata: pts.map((p) => ["point", p.index]),
@@ -42,7 +71,7 @@ export function frontPlot(el, front, onPick, selected = null) {
       marker: { size: three ? 6 : 11, symbol: three ? "square" : "diamond", color: COLORS[2] } });
   }
   const paper = (front.paper && front.paper.marks) || [];
-  if (paper.length) {
+  if (front.paper && paper.length) {
     traces.push({ ...base, ...xyz((j) => paper.map((p) => p.objectives[j])), mode: three ? "markers" : "markers+text",
       name: `the paper's values (${front.paper.source})`, text: paper.map((p) => p.label), textposition: "bottom center",
       hoverinfo: "text+x+y" + (three ? "+z" : ""),
@@ -62,9 +91,10 @@ export function frontPlot(el, front, onPick, selected = null) {
         zaxis: { title: { text: axis(o[2]) } } }, margin: { l: 0, r: 0, t: 20, b: 0 } }
     : { ...LAYOUT, xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: m > 1 ? axis(o[1]) : "" } } };
   Plotly.react(el, traces, layout, CONFIG);
-  el.removeAllListeners && el.removeAllListeners("plotly_click");
-  el.on("plotly_click", (ev) => {
-    const cd = ev.points && ev.points[0] && ev.points[0].customdata;
+  const plot = /** @type {PlotlyHTMLElement} */ (el);
+  plot.removeAllListeners && plot.removeAllListeners("plotly_click");
+  plot.on("plotly_click", (ev) => {
+    const cd = /** @type {["point", number] | ["baseline", string] | undefined} */ (ev.points && ev.points[0] && ev.points[0].customdata);
     if (!cd) return;
     onPick(cd[0] === "point" ? { kind: "point", index: cd[1] } : { kind: "baseline", name: cd[1] });
   });
@@ -73,14 +103,20 @@ export function frontPlot(el, front, onPick, selected = null) {
 /** Best value of each objective so far (one subplot each) and hypervolume per generation.
  * The best so far is the API's `best_so_far` (the least value of the objective on the fronts
  * up to that generation); a row without it (an older API) falls back to `best`, which for
- * several objectives is the compromise point's and may rise. */
+ * several objectives is the compromise point's and may rise.
+ * @param {HTMLElement} el
+ * @param {GenerationOut[]} generations
+ * @param {Array<Pick<Quantity, "name" | "label" | "axis">>} objectives
+ */
 export function convergencePlot(el, generations, objectives) {
   const g = generations.map((r) => r.generation);
   const m = Math.max(1, objectives.length);
   const hv = generations.map((r) => r.hypervolume);
   const hasHv = hv.some((v) => v !== null && v !== undefined);
   const rows = m + (hasHv ? 1 : 0);
+  /** @type {PlotSpec[]} */
   const traces = [];
+  /** @type {PlotSpec} */
   const layout = { ...LAYOUT, grid: { rows, columns: 1, pattern: "independent" }, showlegend: false,
     height: 130 * rows + 70, margin: { l: 70, r: 16, t: 20, b: 40 } };
   for (let j = 0; j < m; j++) {
@@ -104,7 +140,12 @@ export function convergencePlot(el, generations, objectives) {
   Plotly.react(el, traces, layout, CONFIG);
 }
 
-/** One joint signal (q, qd, τ, …) of a motion (GET /jobs/{id}/motion), one line per joint. */
+/**
+ * One joint signal (q, qd, τ, …) of a motion (GET /jobs/{id}/motion), one line per joint.
+ * @param {HTMLElement} el
+ * @param {MotionOut} motion
+ * @param {string} signalName
+ */
 export function jointPlot(el, motion, signalName) {
   const sig = motion.signals.find((s) => s.name === signalName) || motion.signals[0];
   if (!sig) { Plotly.react(el, [], { ...LAYOUT, title: { text: "no motion for this solution" } }, CONFIG); return; }
@@ -114,14 +155,19 @@ export function jointPlot(el, motion, signalName) {
     yaxis: { title: { text: `${sig.label} [${sig.unit}]` } } }, CONFIG);
 }
 
-/** Fronts of sweep cells overlaid: one colour and one legend entry per cell. */
+/**
+ * Fronts of sweep cells overlaid: one colour and one legend entry per cell.
+ * @param {HTMLElement} el
+ * @param {SweepFrontsOut} fronts
+ */
 export function overlayPlot(el, fronts) {
   const m = fronts.objectives.length;
   const three = m >= 3;
+  /** @type {PlotSpec[]} */
   const traces = [];
   fronts.cells.forEach((cell, i) => {
     const color = COLORS[i % COLORS.length];
-    cell.jobs.forEach((job, k) => {
+    /** @type {CellFrontJob[]} */ (cell.jobs).forEach((job, k) => {
       const P = job.points;
       const t = { name: `cell ${cell.cell}: ${cell.label}`, legendgroup: `c${cell.cell}`, showlegend: k === 0,
         mode: "markers", marker: { color, size: three ? 3 : 6 }, text: P.map(() => `seed ${job.seed} · ${job.job_id.slice(0, 8)}`),
@@ -135,8 +181,9 @@ export function overlayPlot(el, fronts) {
     ? { ...LAYOUT, scene: { xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: axis(o[1]) } }, zaxis: { title: { text: axis(o[2]) } } } }
     : { ...LAYOUT, xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: m > 1 ? axis(o[1]) : "" } } };
   Plotly.react(el, traces, layout, CONFIG);
-  el.removeAllListeners && el.removeAllListeners("plotly_click");
-  el.on("plotly_click", (ev) => {
+  const plot = /** @type {PlotlyHTMLElement} */ (el);
+  plot.removeAllListeners && plot.removeAllListeners("plotly_click");
+  plot.on("plotly_click", (ev) => {
     const id = ev.points && ev.points[0] && ev.points[0].customdata;
     if (id) location.hash = `#/job/${id}`;
   });

@@ -10,24 +10,34 @@
 // Content-Security-Policy refuses it too; this keeps the console quiet). What it refused is
 // kept in window.legoptRefused (the browser tests read it).
 const ownFetch = window.fetch.bind(window);
-window.legoptRefused = [];
+/** @type {string[]} */
+const refused = [];
+window.legoptRefused = refused;
 window.fetch = (input, init) => {
-  const url = new URL(typeof input === "string" ? input : input.url, location.href);
+  // a string, a URL or a Request (a URL has no .url: its own text is the address)
+  const url = new URL(input instanceof Request ? input.url : String(input), location.href);
   if (url.origin !== location.origin) {
-    window.legoptRefused.push(url.href);
+    refused.push(url.href);
     return Promise.resolve(new Response(null, { status: 204 }));
   }
   return ownFetch(input, init);
 };
 
-const status = document.getElementById("status");
+const statusLine = /** @type {HTMLElement} */ (document.getElementById("status"));
+/** @type {RerunWebHandle | null} */
 let handle = null;
 let channel = 0;
+/** @type {[ArrayBuffer | Uint8Array, string | undefined] | null} */
 let queued = null;
 
-function say(text) { status.textContent = text; status.hidden = !text; }
+/** @param {string} text shown in the status line (hidden when empty) */
+function say(text) { statusLine.textContent = text; statusLine.hidden = !text; }
 
-// Open a recording (ArrayBuffer or Uint8Array); replaces the previous one.
+/**
+ * Open a recording (ArrayBuffer or Uint8Array); replaces the previous one.
+ * @param {ArrayBuffer | Uint8Array} bytes
+ * @param {string} [name]
+ */
 window.legoptOpen = function (bytes, name) {
   if (!handle) { queued = [bytes, name]; return; }
   if (channel) handle.close_channel(`legopt-${channel}`);
@@ -50,7 +60,7 @@ async function boot() {
   window._handle = h;
   say("");
   document.body.dataset.ready = "1";
-  if (queued) { window.legoptOpen(...queued); queued = null; }
+  if (queued) { window.legoptOpen?.(...queued); queued = null; }
   if (window.parent !== window) window.parent.postMessage({ legoptViewer: "ready" }, location.origin);
   setInterval(() => {
     if (h.has_panicked()) say(`The viewer stopped: ${h.panic_message()}`);

@@ -8,16 +8,40 @@
 import { api, download } from "../api.js";
 import { convergencePlot, frontPlot, jointPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
-import { bar, best, clear, fill, h, jobBadge, num, shortId, TERMINAL, violationText, when } from "../ui.js";
+import { bar, best, clear, errorText, fill, h, jobBadge, num, shortId, TERMINAL, violationText, when } from "../ui.js";
 import { rerun } from "./jobs.js";
+
+/** @typedef {import("../api_types").FrontOut} FrontOut */
+/** @typedef {import("../api_types").GapOut} GapOut */
+/** @typedef {import("../api_types").GenerationOut} GenerationOut */
+/** @typedef {import("../api_types").GenerationPage} GenerationPage */
+/** @typedef {import("../api_types").JobDetail} JobDetail */
+/** @typedef {import("../api_types").MotionOut} MotionOut */
+/** @typedef {import("../api_types").Quantity} Quantity */
+/** @typedef {import("../api_types").ResultOut} ResultOut */
+/** @typedef {import("../api_types").TaskOut} TaskOut */
+/** @typedef {import("../plots.js").Selection} Selection */
+/**
+ * What the optimiser earned (a result's `summary.start`, legcore/earned.py; the API's schema
+ * leaves `summary` untyped).
+ * @typedef {{ objectives?: Array<{ objective: string, optimum: number, initial?: number, free?: number,
+ *   earned_pct?: number | null }>, verdict?: string, free?: { what: string } | null }} EarnedStart
+ */
 
 const POLL_MS = 1500;
 // How often the page asks again for a front whose points' metrics are still being computed.
 const METRICS_RETRY_MS = 3000;
 
+/**
+ * One job's page (#/job/ID) into `main`; its cleanup.
+ * @param {HTMLElement} main
+ * @param {string} jobId
+ * @returns {Promise<() => void>}
+ */
 export async function render(main, jobId) {
   let alive = true;
-  let timer = null;
+  /** @type {number | undefined} */
+  let timer;
   const head = h("div");
   const verdict = h("div#verdict");
   const progress = h("div.card");
@@ -28,11 +52,17 @@ export async function render(main, jobId) {
   const viewer = new Viewer();
   const metrics = h("div.card#metrics");
   const spec = h("div.card");
+  /** @type {HTMLElement[]} */
   const plots = [conv, frontEl];
+  /** @type {FrontOut | null} */
   let front = null;
-  let metricsTimer = null;
+  /** @type {number | undefined} */
+  let metricsTimer;
+  /** @type {Selection | null} */
   let selected = null;
+  /** @type {number | null} */
   let lastGen = null;
+  /** @type {GenerationOut[]} */
   let generations = [];
   let signal = "q";
 
@@ -51,11 +81,13 @@ export async function render(main, jobId) {
 
   async function refresh() {
     clearTimeout(timer);
+    /** @type {JobDetail} */
     const job = await api(`/jobs/${jobId}`);
     if (!alive) return;
     drawHead(job);
     drawVerdict(job);
     drawProgress(job);
+    /** @type {GenerationPage} */
     const page = await api(`/jobs/${jobId}/generations${lastGen === null ? "" : `?after=${lastGen}`}`);
     generations = generations.concat(page.items);
     if (page.items.length) lastGen = page.next_after;
@@ -67,12 +99,18 @@ export async function render(main, jobId) {
     }
   }
 
+  /**
+   * Placeholder objectives f1, f2, … (as many as a generation's best has) until the front
+   * gives their names.
+   * @param {GenerationOut[]} gens
+   */
   function objectivesOf(gens) {
     const b = gens[0] && gens[0].best;
     const m = Array.isArray(b) ? b.length : 1;
     return Array.from({ length: m }, (_, j) => ({ name: `f${j + 1}`, label: `f${j + 1}`, unit: "", axis: `f${j + 1}` }));
   }
 
+  /** @param {JobDetail} job */
   function drawHead(job) {
     fill(head, h("div.toolbar",
       h("h1", job.name || `Job ${shortId(job.id)}`), jobBadge(job),
@@ -87,7 +125,13 @@ export async function render(main, jobId) {
 
   // The verdict of a succeeded job (GET /jobs/{id}: feasible, violations); the task's rules
   // are added once the result is loaded.
+  /** @type {JobDetail | null} */
   let verdictJob = null;
+  /**
+   * @param {JobDetail} job
+   * @param {TaskOut | null} [task]
+   * @param {GapOut | null} [gap]
+   */
   function drawVerdict(job, task = null, gap = null) {
     verdictJob = job;
     if (job.status !== "succeeded" || job.feasible === null || job.feasible === undefined) {
@@ -110,6 +154,7 @@ export async function render(main, jobId) {
 
   // How far a single-objective optimum is from the best its problem allows (GET
   // /jobs/{id}/result: gap), or why there is no such reference.
+  /** @param {GapOut | null} gap */
   function gapBlock(gap) {
     if (!gap || !gap.objective) return null;
     if (gap.reference === null || gap.reference === undefined) {
@@ -122,6 +167,7 @@ export async function render(main, jobId) {
       gap.method ? h("span.muted", ` (${gap.method})`) : null);
   }
 
+  /** @param {TaskOut} task */
   function taskBlock(task) {
     const rules = Object.entries(task.rules || {});
     if (!rules.length && !task.preset) return null;
@@ -131,6 +177,7 @@ export async function render(main, jobId) {
       rules.length ? h("ul.task-rules", rules.map(([k, r]) => h("li", { dataset: { field: k } }, h("span.mono", k), `: ${r}`))) : null);
   }
 
+  /** @param {JobDetail} job */
   function drawProgress(job) {
     fill(progress, 
       h("dl.kv",
@@ -145,15 +192,17 @@ export async function render(main, jobId) {
     fill(spec, h("h2", "Spec"), h("pre.spec", JSON.stringify(job.spec, null, 2)));
   }
 
+  /** @param {JobDetail} job a succeeded job */
   async function loadResult(job) {
-    const [f, result] = await Promise.all([api(`/jobs/${job.id}/front`), api(`/jobs/${job.id}/result`)]);
+    const [f, result] = await Promise.all([/** @type {Promise<FrontOut>} */ (api(`/jobs/${job.id}/front`)),
+      /** @type {Promise<ResultOut>} */ (api(`/jobs/${job.id}/result`))]);
     if (!alive) return;
     front = f;
     if ((result.task || result.gap) && verdictJob) drawVerdict(verdictJob, result.task, result.gap);
     if (generations.length) convergencePlot(conv, generations, front.objectives);
     frontPlot(frontEl, front, pick);
-    drawFrontTable();
-    drawMetrics(result);
+    drawFrontTable(front);
+    drawMetrics(front, result);
     if (front.point_metrics === "pending") metricsTimer = setTimeout(() => reloadPointMetrics(job).catch(() => {}), METRICS_RETRY_MS);
     const first = front.best_index ?? (front.points[0] && front.points[0].index);
     if (first !== undefined && first !== null) pick({ kind: "point", index: first });
@@ -161,7 +210,9 @@ export async function render(main, jobId) {
 
   // The points' metrics are decoded on the server the first time the front is asked for; a
   // large front answers "pending" first: ask again, then redraw the table (selection kept).
+  /** @param {JobDetail} job */
   async function reloadPointMetrics(job) {
+    /** @type {FrontOut} */
     const f = await api(`/jobs/${job.id}/front`);
     if (!alive) return;
     if (f.point_metrics === "pending") {
@@ -169,11 +220,12 @@ export async function render(main, jobId) {
       return;
     }
     front = f;
-    drawFrontTable();
+    drawFrontTable(front);
     markSelected();
   }
 
-  function drawFrontTable() {
+  /** @param {FrontOut} front */
+  function drawFrontTable(front) {
     clear(frontTable);
     const o = front.objectives;
     const nx = Math.min(front.variables.length, 12);
@@ -205,8 +257,9 @@ export async function render(main, jobId) {
       tr.addEventListener("click", () => pick({ kind: "baseline", name: b.name }));
       body.append(tr);
     }
-    for (const p of (front.paper && front.paper.marks) || []) {
-      body.append(h("tr.paper", { dataset: { paper: p.label } }, h("td", h("em", `${p.label} (${front.paper.source})`)),
+    const paperOut = front.paper;
+    for (const p of (paperOut && paperOut.marks) || []) {
+      body.append(h("tr.paper", { dataset: { paper: p.label } }, h("td", h("em", `${p.label} (${paperOut?.source})`)),
         p.objectives.map((v) => h("td.num", num(v))), ms.map(() => h("td")), front.variables.slice(0, nx).map(() => h("td"))));
     }
     frontTable.append(body);
@@ -222,28 +275,37 @@ export async function render(main, jobId) {
     return row;
   }
 
-  function drawMetrics(result) {
+  /**
+   * @param {FrontOut} front
+   * @param {ResultOut} result
+   */
+  function drawMetrics(front, result) {
     const labels = Object.fromEntries(front.metrics.map((q) => [q.name, q]));
     const paper = front.paper ? front.paper.metrics : null;
+    /** @param {string} k */
     const paperCell = (k) => {
       const pv = paper && paper[k];
       if (!pv) return h("td.num.muted", "—");
       const text = `${pv.start === null ? "" : `${num(pv.start)} → `}${num(pv.optimum)}`;
       return h("td.num", { title: [pv.symbol && `paper: ${pv.symbol}`, pv.note].filter(Boolean).join(" — ") }, text);
     };
-    const rows = Object.entries(result.metrics || {}).map(([k, v]) => {
+    const rows = Object.entries(/** @type {Record<string, unknown>} */ (result.metrics) || {}).map(([k, v]) => {
       const q = labels[k] || { label: k, unit: "" };
       return h("tr", h("td", q.label), h("td.mono.muted", k), h("td.num", num(v)), h("td", q.unit),
         paper ? paperCell(k) : null, front.baselines.map((b) => h("td.num", num(b.metrics[k]))));
     });
     fill(metrics, earnedBlock(result), h("h2", "Metrics of the reported optimum"),
       h("table#metrics-table", h("thead", h("tr", h("th", "metric"), h("th", "name"), h("th.num", "optimum"), h("th", "unit"),
-        paper ? h("th.num", { title: front.paper.source }, "paper: start → optimum") : null,
+        paper ? h("th.num", { title: front.paper?.source }, "paper: start → optimum") : null,
         front.baselines.map((b) => baselineHead(b.name, result)))), h("tbody", rows)));
   }
 
   // A baseline's column: its name, and "infeasible" in red when it violates a constraint on
   // this robot (a change against it would mean nothing).
+  /**
+   * @param {string} name
+   * @param {ResultOut} result
+   */
   function baselineHead(name, result) {
     const rec = (result.baselines || []).find((x) => x.name === name);
     if (!rec || rec.feasible !== false) return h("th.num", `baseline ${name}`);
@@ -253,8 +315,10 @@ export async function render(main, jobId) {
 
   // What the optimiser earned: its initial population's best and the solution the encoding
   // gives with no search (summary.start, legcore/earned.py) beside the optimum.
+  /** @param {ResultOut} result */
   function earnedBlock(result) {
-    const st = (result.summary || {}).start;
+    /** @type {EarnedStart | undefined} */
+    const st = (/** @type {{ start?: EarnedStart } | null} */ (result.summary) || {}).start;
     if (!st || !st.objectives) return null;
     const rows = st.objectives.map((r) => h("tr", h("td.mono", r.objective), h("td.num", num(r.initial)),
       h("td.num", num(r.free)), h("td.num", num(r.optimum)), h("td.num", r.earned_pct == null ? "" : `${num(r.earned_pct)} %`)));
@@ -264,7 +328,9 @@ export async function render(main, jobId) {
         h("th.num", "earned over the initial best"))), h("tbody", rows)));
   }
 
+  /** @param {Selection} sel */
   async function pick(sel) {
+    if (!front) return;
     selected = sel;
     const row = markSelected();
     if (row) row.scrollIntoView({ block: "nearest" });
@@ -273,16 +339,21 @@ export async function render(main, jobId) {
     fill(motionCard, h("h2", `Motion of ${title}`), h("p.muted", "decoding…"));
     const q = sel.kind === "point" ? `point=${sel.index}` : `baseline=${encodeURIComponent(sel.name)}`;
     try {
+      /** @type {MotionOut} */
       const motion = await api(`/jobs/${jobId}/motion?${q}`);
       if (selected !== sel || !alive) return;
       drawMotion(motion, title);
       if (sel.kind === "point") viewer.open(`/jobs/${jobId}/pareto/${sel.index}/recording`, `${title} of ${shortId(jobId)}`);
       else viewer.open(`/jobs/${jobId}/baselines/${encodeURIComponent(sel.name)}/recording`, `${title} of ${shortId(jobId)}`);
     } catch (err) {
-      fill(motionCard, h("h2", `Motion of ${title}`), h("p.error", err.message));
+      fill(motionCard, h("h2", `Motion of ${title}`), h("p.error", errorText(err)));
     }
   }
 
+  /**
+   * @param {MotionOut} motion
+   * @param {string} title
+   */
   function drawMotion(motion, title) {
     const plot = h("div.plot#joint-plot");
     plots.push(plot);

@@ -3,9 +3,15 @@
 // job, download the list. A succeeded job whose optimum violates a constraint shows a red
 // "infeasible" badge in place of the green "succeeded" (the verdict filter finds them).
 import { api, download, idempotencyKey, query } from "../api.js";
-import { bar, best, clear, h, jobBadge, shortId, TERMINAL, when } from "../ui.js";
+import { bar, best, clear, errorText, h, jobBadge, shortId, TERMINAL, when } from "../ui.js";
+
+/** @typedef {import("../api_types").DashboardOptions} DashboardOptions */
+/** @typedef {import("../api_types").JobDetail} JobDetail */
+/** @typedef {import("../api_types").JobRowOut} JobRowOut */
+/** @typedef {import("../api_types").JobRowPage} JobRowPage */
 
 const POLL_MS = 2000;
+/** @type {Array<[string, string, string | null]>} key, heading, the API's sort key (null: not sortable) */
 const COLUMNS = [
   ["name", "job", null], ["kind", "study", "kind"], ["robot", "robot", "robot"],
   ["optimizer", "optimizer", "optimizer"], ["status", "status", "status"],
@@ -14,6 +20,10 @@ const COLUMNS = [
   ["actions", "", null],
 ];
 
+/**
+ * The filters, sort and page size a #/jobs?… address asks for.
+ * @param {string} hash
+ */
 function stateFromHash(hash) {
   const q = new URLSearchParams((hash.split("?")[1]) || "");
   return { q: q.get("q") || "", kind: q.get("kind") || "", optimizer: q.get("optimizer") || "",
@@ -22,33 +32,46 @@ function stateFromHash(hash) {
     sort: q.get("sort") || "created", order: q.get("order") || "desc", limit: 50 };
 }
 
+/**
+ * The jobs page (#/jobs?filters) into `main`; its cleanup.
+ * @param {HTMLElement} main
+ * @param {string} _param
+ * @param {string} hash
+ * @returns {Promise<() => void>}
+ */
 export async function render(main, _param, hash) {
+  /** @type {ReturnType<typeof stateFromHash> & { cursors: Array<string | null>, page: number }} */
   const st = { ...stateFromHash(hash), cursors: [null], page: 0 };
+  /** @type {DashboardOptions} */
   const options = await api("/dashboard/options");
-  let timer = null;
+  /** @type {number | undefined} */
+  let timer;
   let alive = true;
 
-  const search = h("input", { type: "search", placeholder: "search name, robot, seed=3, id…", value: st.q, size: 28 });
-  const kind = h("select", h("option", { value: "" }, "all studies"),
-    options.kinds.map((k) => h("option", { value: k.value, selected: k.value === st.kind }, k.value)));
-  const optimizer = h("select", h("option", { value: "" }, "all optimizers"),
-    options.optimizers.map((o) => h("option", { value: o.value, selected: o.value === st.optimizer }, o.label)));
-  const robot = h("input", { placeholder: "robot", value: st.robot, size: 14 });
-  const verdict = h("select#verdict-filter", h("option", { value: "" }, "any verdict"),
-    [["true", "feasible"], ["false", "infeasible"]].map(([v, label]) => h("option", { value: v, selected: v === st.feasible }, label)));
+  const search = /** @type {HTMLInputElement} */ (h("input", { type: "search", placeholder: "search name, robot, seed=3, id…", value: st.q, size: 28 }));
+  const kind = /** @type {HTMLSelectElement} */ (h("select", h("option", { value: "" }, "all studies"),
+    options.kinds.map((k) => h("option", { value: k.value, selected: k.value === st.kind }, k.value))));
+  const optimizer = /** @type {HTMLSelectElement} */ (h("select", h("option", { value: "" }, "all optimizers"),
+    options.optimizers.map((o) => h("option", { value: o.value, selected: o.value === st.optimizer }, o.label))));
+  const robot = /** @type {HTMLInputElement} */ (h("input", { placeholder: "robot", value: st.robot, size: 14 }));
+  const verdict = /** @type {HTMLSelectElement} */ (h("select#verdict-filter", h("option", { value: "" }, "any verdict"),
+    [["true", "feasible"], ["false", "infeasible"]].map(([v, label]) => h("option", { value: v, selected: v === st.feasible }, label))));
   const statusBoxes = options.statuses.map((s) => h("label", h("input", { type: "checkbox", value: s,
     checked: st.status.includes(s) }), " ", s));
+  /** @param {HTMLElement} label a status's label: its checkbox */
+  const boxOf = (label) => /** @type {HTMLInputElement} */ (label.firstChild);
   const info = h("span.muted");
   const table = h("table#jobs-table");
   const pager = h("div.pager");
 
   const filters = () => ({ q: search.value.trim(), kind: kind.value, optimizer: optimizer.value,
-    robot: robot.value.trim(), status: statusBoxes.map((l) => l.firstChild).filter((c) => c.checked).map((c) => c.value),
+    robot: robot.value.trim(), status: statusBoxes.map(boxOf).filter((c) => c.checked).map((c) => c.value),
     sweep_id: st.sweep_id, feasible: verdict.value });
 
   function restart() { st.cursors = [null]; st.page = 0; load(); }
-  for (const el of [kind, optimizer, verdict, ...statusBoxes.map((l) => l.firstChild)]) el.addEventListener("change", restart);
-  let debounce = null;
+  for (const el of [kind, optimizer, verdict, ...statusBoxes.map(boxOf)]) el.addEventListener("change", restart);
+  /** @type {number | undefined} */
+  let debounce;
   for (const el of [search, robot]) el.addEventListener("input", () => { clearTimeout(debounce); debounce = setTimeout(restart, 300); });
 
   const newJob = newJobForm(options, () => restart());
@@ -67,9 +90,10 @@ export async function render(main, _param, hash) {
     clearTimeout(timer);
     const f = filters();
     const params = { ...f, sort: st.sort, order: st.order, limit: st.limit, cursor: st.cursors[st.page] };
+    /** @type {JobRowPage} */
     let page;
     try { page = await api(`/dashboard/jobs${query(params)}`); } catch (err) {
-      info.textContent = err.message; return;
+      info.textContent = errorText(err); return;
     }
     if (!alive) return;
     const start = st.page * st.limit;
@@ -80,6 +104,7 @@ export async function render(main, _param, hash) {
     if (page.items.some((j) => !TERMINAL.has(j.status))) timer = setTimeout(load, POLL_MS);
   }
 
+  /** @param {JobRowOut[]} items */
   function drawTable(items) {
     clear(table);
     table.append(h("thead", h("tr", COLUMNS.map(([key, label, sortKey]) => {
@@ -104,29 +129,40 @@ export async function render(main, _param, hash) {
         h("td.num", best(j.best_objective)), h("td", when(j.created_at)), h("td", when(j.finished_at)),
         h("td", j.tags.map((t) => h("span.tag", t)), j.sweep_id ? h("a.tag", { href: `#/sweep/${j.sweep_id}` }, "sweep") : null),
         h("td", actions(j)));
-      tr.addEventListener("click", (ev) => { if (!ev.target.closest("a,button")) location.hash = `#/job/${j.id}`; });
+      tr.addEventListener("click", (ev) => {
+        if (!/** @type {Element} */ (ev.target).closest("a,button")) location.hash = `#/job/${j.id}`;
+      });
       body.append(tr);
     }
     table.append(body);
   }
 
+  /**
+   * The buttons of a job's row: cancel (unless finished), re-run.
+   * @param {JobRowOut} j
+   */
   function actions(j) {
     const out = [];
     if (!TERMINAL.has(j.status)) {
       out.push(h("button.danger", { title: "Cancel this job", dataset: { action: "cancel" }, on: { click: async (ev) => {
-        ev.target.disabled = true;
-        try { await api(`/jobs/${j.id}/cancel`, { method: "POST" }); } catch (err) { info.textContent = err.message; }
+        /** @type {HTMLButtonElement} */ (ev.target).disabled = true;
+        try { await api(`/jobs/${j.id}/cancel`, { method: "POST" }); } catch (err) { info.textContent = errorText(err); }
         load(); } } }, "Cancel"));
     }
     out.push(h("button.secondary", { title: "Submit the same spec with a new seed", dataset: { action: "rerun" }, on: { click: async (ev) => {
-      ev.target.disabled = true;
+      const button = /** @type {HTMLButtonElement} */ (ev.target);
+      button.disabled = true;
       let created;
-      try { created = await rerun(j.id); } catch (err) { info.textContent = err.message; ev.target.disabled = false; return; }
+      try { created = await rerun(j.id); } catch (err) { info.textContent = errorText(err); button.disabled = false; return; }
       location.hash = `#/job/${created.id}`;
     } } }, "Re-run"));
     return out;
   }
 
+  /**
+   * @param {JobRowPage} page
+   * @param {number} start the index of the page's first row
+   */
   function drawPager(page, start) {
     clear(pager);
     const prev = h("button.secondary", { disabled: start === 0, on: { click: () => {
@@ -140,17 +176,28 @@ export async function render(main, _param, hash) {
   return () => { alive = false; clearTimeout(timer); };
 }
 
-/** Submit a job's spec again with a new seed; the new job. */
+/**
+ * Submit a job's spec again with a new seed; the new job.
+ * @param {string} jobId
+ * @returns {Promise<JobDetail>}
+ */
 export async function rerun(jobId) {
+  /** @type {JobDetail} */
   const job = await api(`/jobs/${jobId}`);
-  const spec = { ...job.spec, seed: Math.floor(Math.random() * 2 ** 31) };
+  const spec = { .../** @type {Record<string, unknown>} */ (job.spec), seed: Math.floor(Math.random() * 2 ** 31) };
   return api("/jobs", { method: "POST", body: spec, headers: { "Idempotency-Key": idempotencyKey() } });
 }
 
+/**
+ * The "New job" form: a study with the paper's defaults, or a pasted spec.
+ * @param {DashboardOptions} options
+ * @param {(job: JobDetail) => void} onDone called with the job submitted
+ * @returns {HTMLElement}
+ */
 function newJobForm(options, onDone) {
-  const kind = h("select#new-kind", options.kinds.map((k) => h("option", { value: k.value }, `${k.value} — ${k.label}`)));
-  const generations = h("input#new-generations", { type: "number", min: 1, value: 10, size: 6 });
-  const text = h("textarea#new-spec", { rows: 6, cols: 80, placeholder: '{"problem": {"kind": "path_tracking"}, "budget": {"generations": 20}}' });
+  const kind = /** @type {HTMLSelectElement} */ (h("select#new-kind", options.kinds.map((k) => h("option", { value: k.value }, `${k.value} — ${k.label}`))));
+  const generations = /** @type {HTMLInputElement} */ (h("input#new-generations", { type: "number", min: 1, value: 10, size: 6 }));
+  const text = /** @type {HTMLTextAreaElement} */ (h("textarea#new-spec", { rows: 6, cols: 80, placeholder: '{"problem": {"kind": "path_tracking"}, "budget": {"generations": 20}}' }));
   const msg = h("p.muted");
   const form = h("div.card#new-job", { hidden: true },
     h("h2", "New job"),
@@ -158,15 +205,17 @@ function newJobForm(options, onDone) {
       h("button#submit-example", { on: { click: () => submit({ problem: { kind: kind.value }, budget: { generations: Number(generations.value) } }) } }, "Submit")),
     h("p.muted", "…or paste a whole job spec (JSON, the document of `legopt run`):"), text,
     h("div.toolbar", h("button.secondary", { on: { click: () => {
-      try { submit(JSON.parse(text.value)); } catch (err) { msg.textContent = `not JSON: ${err.message}`; }
+      try { submit(JSON.parse(text.value)); } catch (err) { msg.textContent = `not JSON: ${errorText(err)}`; }
     } } }, "Submit spec")), msg);
+  /** @param {unknown} spec a job spec (the document of `legopt run`) */
   async function submit(spec) {
     msg.textContent = "submitting…";
     try {
+      /** @type {JobDetail} */
       const job = await api("/jobs", { method: "POST", body: spec, headers: { "Idempotency-Key": idempotencyKey() } });
       msg.textContent = `job ${job.id} queued`;
       onDone(job);
-    } catch (err) { msg.textContent = err.message; msg.className = "error"; }
+    } catch (err) { msg.textContent = errorText(err); msg.className = "error"; }
   }
   return form;
 }

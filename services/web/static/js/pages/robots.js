@@ -1,12 +1,23 @@
 // Robots: yours and the catalog's; one robot's joints, limits, masses and the study kinds that
 // accept it.
 import { api, query } from "../api.js";
-import { clear, fill, h, num } from "../ui.js";
+import { fill, h, num } from "../ui.js";
 
+/** @typedef {import("../api_types").Page_RobotOut} RobotPage */
+/** @typedef {import("../api_types").RobotView} RobotView */
+/** @typedef {import("../api_types").StudyFit} StudyFit */
+
+/**
+ * The robots page (#/robots, #/robot/ID) into `main`.
+ * @param {HTMLElement} main
+ * @param {string} robotId the robot shown (URI-encoded; "" for none)
+ * @returns {Promise<void>}
+ */
 export async function render(main, robotId) {
   const list = h("table#robots-table");
   const detail = h("div#robot-detail");
   main.append(h("h1", "Robots"), h("div.row", h("div.card.side", list), h("div.grow", detail)));
+  /** @type {RobotPage} */
   const page = await api(`/robots${query({ include_catalog: true, limit: 1000 })}`);
   list.append(h("thead", h("tr", h("th", "name"), h("th", "source"))));
   const body = h("tbody");
@@ -19,11 +30,13 @@ export async function render(main, robotId) {
   if (robotId) await show(decodeURIComponent(robotId));
   else detail.append(h("div.card", h("p.muted", "Pick a robot.")));
 
+  /** @param {string} id */
   async function show(id) {
     for (const tr of list.querySelectorAll("tr.selected")) tr.classList.remove("selected");
     const row = list.querySelector(`tr[data-robot="${CSS.escape(id)}"]`);
     if (row) row.classList.add("selected");
     fill(detail, h("div.card", h("p.muted", "building the model…")));
+    /** @type {RobotView} */
     const r = await api(`/dashboard/robots/${encodeURIComponent(id)}`);
     fill(detail, 
       h("div.card", h("h2", r.name),
@@ -43,7 +56,10 @@ export async function render(main, robotId) {
 }
 
 /** What a study fit says: the rules its default task was derived by (or the paper's preset),
- * or the field to change and why it is refused. */
+ * or the field to change and why it is refused.
+ * @param {StudyFit} s
+ * @returns {string}
+ */
 function fitText(s) {
   if (!s.accepts) return `${s.field ? `${s.field}: ` : ""}${s.reason || ""}`;
   if (s.preset) return `the paper's settings (${s.preset})`;

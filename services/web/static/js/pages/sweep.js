@@ -4,19 +4,33 @@
 import { api, download } from "../api.js";
 import { COLORS, overlayPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
-import { clear, fill, h, num, shortId } from "../ui.js";
+import { fill, h, num, shortId } from "../ui.js";
+
+/** @typedef {import("../api_types").SweepCellsOut} SweepCellsOut */
+/** @typedef {import("../api_types").SweepFrontsOut} SweepFrontsOut */
+/** @typedef {import("../api_types").SweepOut} SweepOut */
 
 const POLL_MS = 3000;
 
+/**
+ * One sweep's page (#/sweep/ID) into `main`; its cleanup.
+ * @param {HTMLElement} main
+ * @param {string} sweepId
+ * @returns {Promise<() => void>}
+ */
 export async function render(main, sweepId) {
   let alive = true;
-  let timer = null;
+  /** @type {number | undefined} */
+  let timer;
   const table = h("table#cells-table");
   const plot = h("div.plot#overlay-plot");
   const summary = h("p.muted");
+  /** @type {Set<number>} the cells whose fronts are drawn */
   const chosen = new Set();
   const viewerBox = h("div");
+  /** @type {Viewer | null} */
   let viewer = null;
+  /** @type {SweepCellsOut | null} */
   let cells = null;
 
   main.append(
@@ -39,7 +53,8 @@ export async function render(main, sweepId) {
 
   async function load() {
     clearTimeout(timer);
-    const [sweep, c] = await Promise.all([api(`/sweeps/${sweepId}?limit=1`), api(`/sweeps/${sweepId}/cells`)]);
+    const [sweep, c] = await Promise.all([/** @type {Promise<SweepOut>} */ (api(`/sweeps/${sweepId}?limit=1`)),
+      /** @type {Promise<SweepCellsOut>} */ (api(`/sweeps/${sweepId}/cells`))]);
     if (!alive) return;
     cells = c;
     summary.textContent = `${sweep.n_jobs} jobs, ${sweep.state}; swept: ${c.columns.join(", ") || "seeds only"}` +
@@ -52,23 +67,25 @@ export async function render(main, sweepId) {
   }
 
   function drawTable() {
-    const stats = cells.stat_columns;
-    fill(table, h("thead", h("tr", h("th", ""), h("th", "cell"), cells.columns.map((p) => h("th", p)),
+    const grid = cells;
+    if (!grid) return;
+    const stats = grid.stat_columns;
+    fill(table, h("thead", h("tr", h("th", ""), h("th", "cell"), grid.columns.map((p) => h("th", p)),
       h("th", "jobs"), stats.map((q) => h("th.num", q.axis)))));
     const body = h("tbody");
-    cells.cells.forEach((cell) => {
+    grid.cells.forEach((cell) => {
       const box = h("input", { type: "checkbox", checked: chosen.has(cell.index), dataset: { cell: cell.index }, on: { change: (ev) => {
-        if (ev.target.checked) chosen.add(cell.index); else chosen.delete(cell.index);
+        if (/** @type {HTMLInputElement} */ (ev.target).checked) chosen.add(cell.index); else chosen.delete(cell.index);
         drawFronts();
       } } });
       const color = COLORS[[...chosen].sort((a, b) => a - b).indexOf(cell.index) % COLORS.length];
       body.append(h("tr", { dataset: { cellRow: cell.index } },
         h("td", box), h("td", chosen.has(cell.index) ? h("span.legend-swatch", { style: `background:${color}` }) : null, String(cell.index)),
-        cells.columns.map((p) => h("td", JSON.stringify(cell.values[p]))),
+        grid.columns.map((p) => h("td", JSON.stringify(cell.values[p]))),
         h("td", cell.job_ids.map((id, k) => h("a.tag", { href: `#/job/${id}`, title: `seed ${cell.seeds[k]}` }, shortId(id)))),
         stats.map((q) => {
           const s = cell.stats[q.name];
-          const isBest = cells.best[q.name] === cell.index;
+          const isBest = grid.best[q.name] === cell.index;
           return h(`td.num${isBest ? ".best" : ""}`, s && s.mean !== null ? `${num(s.mean)} ± ${num(s.sd)}` : "—",
             s && s.n ? h("span.muted", ` (${s.n})`) : null);
         })));
@@ -79,6 +96,7 @@ export async function render(main, sweepId) {
   async function drawFronts() {
     const ids = [...chosen].sort((a, b) => a - b);
     if (!ids.length) { purge(plot); return; }
+    /** @type {SweepFrontsOut} */
     const fronts = await api(`/sweeps/${sweepId}/fronts?${ids.map((i) => `cell=${i}`).join("&")}`);
     if (!alive) return;
     overlayPlot(plot, fronts);

@@ -1,7 +1,14 @@
 // Your sweeps, newest first, with their job counts.
 import { api, query } from "../api.js";
-import { badge, clear, fill, h, shortId, when } from "../ui.js";
+import { badge, fill, h, shortId, when } from "../ui.js";
 
+/** @typedef {import("../api_types").Page_SweepSummary} SweepPage */
+
+/**
+ * The sweeps page (#/sweeps) into `main`.
+ * @param {HTMLElement} main
+ * @returns {Promise<void>}
+ */
 export async function render(main) {
   const table = h("table#sweeps-table");
   const pager = h("div.pager");
@@ -10,6 +17,7 @@ export async function render(main) {
   main.append(h("h1", "Sweeps"), h("div.card", table, pager));
 
   async function load() {
+    /** @type {SweepPage} */
     const page = await api(`/sweeps${query({ limit, offset })}`);
     fill(table, h("thead", h("tr", h("th", "sweep"), h("th", "created"), h("th.num", "jobs"),
       h("th", "state"), h("th", "statuses"))));
