@@ -345,13 +345,13 @@ def test_front_points_carry_their_metrics_decoded_once(env: dict[str, Any]) -> N
     assert art is not None and art.relative_path.endswith(".json")
 
     # served from the artifact afterwards: no decoding
-    from services.recording import point
+    from services.recording import point as point_module
 
     def no_decode(*_a: Any, **_k: Any) -> Any:
         raise AssertionError("the front's metrics were decoded again")
 
     mp = pytest.MonkeyPatch()
-    mp.setattr(point, "decode_point", no_decode)
+    mp.setattr(point_module, "decode_point", no_decode)
     try:
         again = client.get(f"{API}/jobs/{env['job']}/front", headers=alice).json()
         r = client.get(f"{API}/jobs/{env['job']}/front/export?format=csv", headers=alice)
