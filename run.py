@@ -3,6 +3,7 @@
 
     python3 run.py demo          # the main job on the embedded default (no Redis/Postgres)
     python3 run.py test [ARGS]   # the test suite (ARGS go to pytest; see run_tests)
+    python3 run.py test --quick  # the quick lane: unit tests without the slow ones
     python3 run.py bench         # the benchmark scripts in benchmarks/
     python3 run.py legopt ARGS   # any `legopt` command inside the environment
 
@@ -162,19 +163,25 @@ def selects_tests(args: list[str]) -> bool:
 
 
 def run_tests(py: str, args: list[str]) -> int:
-    """The test suite. ARGS that choose tests run as given (one pytest). Otherwise two phases,
-    each spread over the machine's cores by test file (pytest-xdist): the unit tests, then the
-    real-process tests (``-m integration``: API, workers, brokers, databases, browser), which
-    each start their own services on free ports. Returns the first failing exit code."""
-    if selects_tests(args):
+    """The test suite. ARGS that choose tests run as given (one pytest). ``--quick``: the quick
+    lane, the unit tests without the slow ones (``-m "not integration and not slow"``, a few
+    minutes on 2 cores). Otherwise two phases, each spread over the machine's cores by test
+    file (pytest-xdist): the unit tests, then the real-process tests (``-m integration``: API,
+    workers, brokers, databases, browser), which each start their own services on free ports;
+    each phase prints its 25 slowest tests. Returns the first failing exit code."""
+    quick = "--quick" in args
+    args = [a for a in args if a != "--quick"]
+    if selects_tests(args) and not quick:
         return subprocess.run([py, "-m", "pytest", *args], cwd=ROOT).returncode
     n = str(max(1, min(os.cpu_count() or 1, 4)))
+    phases = ["not integration and not slow"] if quick else ["not integration", "integration"]
     code = 0
-    for marker in ("not integration", "integration"):
+    for marker in phases:
         burn = _cpu_burn() if marker == "integration" else 0
         print(f"run.py: pytest -m {marker!r} on {n} processes"
               + (f", {burn} CPU burners beside them" if burn else ""), flush=True)  # fmt: skip
-        cmd = [py, "-m", "pytest", "-m", marker, "-n", n, "--dist", "loadfile", *args]
+        cmd = [py, "-m", "pytest", "-m", marker, "-n", n, "--dist", "loadfile",
+               "--durations", "25", *args]  # fmt: skip
         burners = [_burner() for _ in range(burn)]
         try:
             rc = subprocess.run(cmd, cwd=ROOT).returncode

@@ -319,6 +319,7 @@ def test_record_run_size_budget() -> None:
     assert any("over the" in n for n in tiny.notes)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("spec_path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_record_run_of_example_specs(spec_path: Path) -> None:
     from legcore.runner import run

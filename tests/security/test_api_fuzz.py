@@ -107,6 +107,7 @@ def _target(kind: str, directory: Path) -> Iterator[Target]:
             yield Target(kind, app, headers, ids)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kinds", FUZZ_DATABASES)
 def test_openapi_fuzz_finds_no_server_error(kinds: tuple[str, ...], tmp_path: Path) -> None:
     with ExitStack() as stack:

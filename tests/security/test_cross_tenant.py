@@ -172,6 +172,7 @@ def masked(response: Response, *ids: str) -> str:
     return text
 
 
+@pytest.mark.slow
 def test_every_route_with_a_path_id_is_404_for_another_key(tenants: Tenants) -> None:
     with_ids = [c for c in app_routes(tenants.app) if c.params]
     assert len(with_ids) >= 9, [f"{c.method} {c.path}" for c in with_ids]

@@ -117,6 +117,7 @@ def check_step(robot: Robot | LeggedRobot, leg: str | None, run: Any, *,
     return step
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(MATRIX_ROBOTS))
 def test_default_task_is_refused_up_front_or_a_feasible_step(
     name: str, robot_spec: SpecOf, built_robot: Any
@@ -141,6 +142,7 @@ def test_default_task_is_refused_up_front_or_a_feasible_step(
     check_step(robot, leg, r)
 
 
+@pytest.mark.slow
 def test_catalog_hexapod_steps_forward_along_its_y_axis() -> None:
     """The catalog hexapod walks along +y (``meta["forward"]``): its first front leg L1 yaws its
     foot along y from a stance 0.75 L from the hip (0.7 L is out of reach inside its joint
@@ -159,6 +161,7 @@ def test_catalog_hexapod_steps_forward_along_its_y_axis() -> None:
                             "problem": {"kind": "swing_energy"}}) == verdict.message
 
 
+@pytest.mark.slow
 def test_a_leg_mounted_sideways_steps_across_its_reach() -> None:
     """Seed 000's leg with a longer shank (0.16 m instead of 0.15: other kinematics, so not the
     paper's preset) reaches out along its base x at home, as a leg on the side of a hexapod

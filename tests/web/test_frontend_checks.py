@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # the quick lane (run.py test --quick) leaves it out
+
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "services" / "web" / "check_frontend.sh"
 

@@ -65,6 +65,7 @@ def _same_result(a: Result, b: Result) -> None:
     assert [r.n_evals for r in a.history] == [r.n_evals for r in b.history]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("kind", "params", "make"), CASES, ids=IDS)
 def test_checkpoint_resume_is_bit_identical(kind: str, params: dict, make: Any) -> None:
     problem = make()

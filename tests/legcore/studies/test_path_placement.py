@@ -360,6 +360,7 @@ def _check_must_show(res: Any) -> dict[str, float]:
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", ["pan", "jar"])
 def test_hka_cuts_energy_and_raises_manipulability(path: str) -> None:
     spec = _spec(path)
@@ -381,6 +382,7 @@ def test_examples_run_at_the_seed_settings(path: str) -> None:
     assert best["mean_manipulability_ratio"] > 0.9
 
 
+@pytest.mark.slow
 def test_same_seed_same_result() -> None:
     spec = {"problem": {"kind": "path_placement", "path": "pan"}, "seed": 3,
             "budget": {"generations": 3}}
@@ -389,6 +391,7 @@ def test_same_seed_same_result() -> None:
     assert get_study("path_placement") is STUDY
 
 
+@pytest.mark.slow
 def test_plain_vs_modified_initialisation_are_both_reported(pan: Any) -> None:
     out = compare_initialisations(problem=pan, seeds=range(3), generations=10)
     rows = out["rows"]

@@ -317,6 +317,7 @@ def test_must_show_on_the_seed_budget(example: str) -> None:
         assert best.metrics["theta_total"] < 0.66  # minimum total displacement (Table 3)
 
 
+@pytest.mark.slow
 def test_gradient_min_energy_baseline_is_no_worse_than_any_start() -> None:
     """Issue 19 item 5: the minimum-energy swing by a gradient method (SLSQP on the via points
     + the grid climb) from the coordinated motion and every other baseline: feasible, on the

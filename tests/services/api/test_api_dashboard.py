@@ -31,6 +31,8 @@ from services.store.session import reset_engine
 from services.store.settings import get_settings
 from services.worker.execute import execute_job
 
+pytestmark = pytest.mark.slow  # the quick lane (run.py test --quick) leaves it out
+
 API = "/api/v1"
 ROOT = Path(__file__).resolve().parents[3]
 SPEC: dict[str, Any] = {
@@ -511,6 +513,7 @@ def test_best_per_objective_never_gets_worse(env: dict[str, Any], hexapod: str) 
     assert [row[f"compromise_{names[0]}"] for row in doc["rows"]] == list(reported[:, 0])
 
 
+@pytest.mark.slow
 def test_single_objective_best_so_far_is_the_incumbent(env: dict[str, Any]) -> None:
     client, alice = env["client"], env["alice"]
     spec = {"problem": {"kind": "swing_energy"}, "optimizer": {"kind": "ga"},

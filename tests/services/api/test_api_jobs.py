@@ -36,6 +36,7 @@ def submit(client: TestClient, headers: dict[str, str], spec: dict[str, Any]) ->
     return r.json()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", KINDS)
 def test_submit_each_study_kind(
     client: TestClient, alice: dict[str, str], sent: list[str], kind: str

@@ -67,6 +67,7 @@ def _verdict(accepted: bool, field: str | None, reason: str | None) -> tuple[boo
     return (accepted, field or "", reason or "")
 
 
+@pytest.mark.slow
 def test_every_place_gives_the_submissions_answer(
     client: TestClient, alice: dict[str, str], stored: dict[str, str], cli: CliRunner
 ) -> None:

@@ -67,6 +67,7 @@ print(json.dumps({"threads": [t0, threads()], "rss_mb": [r0, rss_mb()]}))
 """
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="needs Linux /proc")
 @pytest.mark.parametrize("mode", ["write", "merge"])
 def test_recordings_do_not_leak_threads_or_memory(mode: str) -> None:

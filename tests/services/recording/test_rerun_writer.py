@@ -277,6 +277,7 @@ def test_failed_write_leaves_no_partial_file(
     assert [p.name for p in tmp_path.iterdir()] == ["job.rrd"]
 
 
+@pytest.mark.slow
 def test_long_motion_is_capped(tmp_path: Path) -> None:
     path = tmp_path / "long.rrd"
     motion = arm_motion(K=200_000, T=200.0)
@@ -289,6 +290,7 @@ def test_long_motion_is_capped(tmp_path: Path) -> None:
     assert path.stat().st_size < 5e6
 
 
+@pytest.mark.slow
 def test_hexapod_like_recording_stays_under_20_mb(tmp_path: Path) -> None:
     """18 joints × 20 000 samples, 6 baselines, a 300-point front over 100 generations."""
     path = tmp_path / "hexa.rrd"
@@ -356,6 +358,7 @@ def test_merge_recordings(tmp_path: Path) -> None:
         M.merge_recordings([a, b], out, ["only one"])
 
 
+@pytest.mark.slow
 def test_merged_recording_is_made_in_a_child_once_and_cached(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -540,6 +543,7 @@ def test_open_viewer_without_display_uses_the_web_viewer(
 # ---------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("spec_path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_example_spec_recording(spec_path: Path, tmp_path: Path) -> None:
     from legcore.runner import run

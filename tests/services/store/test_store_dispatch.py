@@ -152,6 +152,7 @@ def test_lost_messages_are_resent_only_for_the_missing_count(engine: Engine) -> 
     assert len(broker.sent) == 7  # two re-sends, not five
 
 
+@pytest.mark.slow
 def test_one_dispatcher_among_many_and_bounded_duplicates(engine: Engine) -> None:
     """Defect 7: every worker's reaper re-sent every long-queued job on every pass (343
     messages for 22 jobs). Now 4 processes pass every second for 10 minutes over 22 jobs

@@ -156,6 +156,7 @@ def _check_exactly_once(seen: Counter[str], producers: int, per_producer: int) -
     assert set(seen) == expected
 
 
+@pytest.mark.slow
 def test_every_message_delivered_exactly_once_under_aggressive_polling(tmp_path: Path) -> None:
     seen, errors = _stress(OURS, tmp_path, producers=2, per_producer=300, consumers=3)
     assert errors == [], f"{len(errors)} consumer errors, e.g. {errors[:3]}"
@@ -347,6 +348,7 @@ def test_celery_app_uses_this_transport_for_filesystem_urls_only(fs_settings: An
     assert make_celery(redis).connection_for_write().transport_cls == "redis"
 
 
+@pytest.mark.slow
 def test_celery_round_trip_survives_a_torn_message(fs_settings: Any) -> None:
     """A real Celery worker (in a thread) consumes over this transport; a torn file in the queue
     is set aside instead of killing the worker, and every task runs once."""
