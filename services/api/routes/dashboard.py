@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Depends, HTTPException, Query
+from fastapi import APIRouter, HTTPException, Query
 from fastapi.concurrency import run_in_threadpool
 
 from legcore.robots import LeggedRobot, Robot, catalog
@@ -18,8 +18,9 @@ from services.api.dashboard_schemas import (
     RobotView,
     StudyFit,
 )
-from services.api.deps import MAX_OFFSET, ApiContext, Context, CurrentKey
+from services.api.deps import MAX_OFFSET, Context, CurrentKey
 from services.api.errors import invalid, not_found
+from services.api.lookups import Filters, sync_labels
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT, ErrorOut
 from services.api.spec_cache import build_robot_cached
 from services.api.study_fits import robot_fits
@@ -31,55 +32,6 @@ from services.store.tables import JobStatus
 router = APIRouter(tags=["dashboard"])
 
 OPTIMIZERS = ("ga", "hka", "moead", "nsga2")
-
-
-def sync_labels(ctx: ApiContext, owner_key_id: str) -> None:
-    """Write the labels of the key's new jobs (a read first: the write lock only when some are
-    missing)."""
-    with ctx.read() as session:
-        missing = dq.missing_labels(session, owner_key_id)
-    if missing:
-        with ctx.write() as session:
-            dq.sync_labels(session, owner_key_id)
-
-
-def job_filter(
-    status_: Annotated[
-        list[JobStatus] | None, Query(alias="status", description="Only these statuses.")
-    ] = None,
-    kind: Annotated[str | None, Query(max_length=64, description="Study kind.")] = None,
-    optimizer: Annotated[str | None, Query(max_length=32, description="Optimizer kind.")] = None,
-    robot: Annotated[str | None, Query(max_length=200, description="Robot name.")] = None,
-    sweep_id: Annotated[str | None, Query(max_length=64, description="Only this sweep.")] = None,
-    tag: Annotated[str | None, Query(max_length=100, description="Jobs with this tag.")] = None,
-    q: Annotated[
-        str | None,
-        Query(
-            max_length=200,
-            description="Words matched in name, kind, robot, optimizer, "
-            "tags, seed (`seed=3`), job and sweep ids.",
-        ),
-    ] = None,  # fmt: skip
-    feasible: Annotated[
-        bool | None,
-        Query(description="Only succeeded jobs whose optimum is feasible (true) / infeasible "
-              "(false)."),
-    ] = None,  # fmt: skip
-) -> dq.JobFilter:
-    """The filters of the jobs page (query parameters)."""
-    return dq.JobFilter(
-        status=tuple(status_ or ()),
-        kind=kind or None,
-        optimizer=optimizer or None,
-        robot=robot or None,
-        sweep_id=sweep_id or None,
-        tag=tag or None,
-        search=(q or "").strip() or None,
-        feasible=feasible,
-    )
-
-
-Filters = Annotated[dq.JobFilter, Depends(job_filter)]
 
 
 @router.get(

@@ -13,10 +13,8 @@ from services.api.convergence import ConvergenceRow, convergence
 from services.api.dashboard_schemas import BaselineMark
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.export_formats import MEDIA_TYPES, ExportFormat, encode, filename
+from services.api.lookups import Filters, cell_table, owned_job, sync_labels
 from services.api.points import point_metrics
-from services.api.routes.dashboard import Filters, sync_labels
-from services.api.routes.jobs import owned_job
-from services.api.routes.sweep_views import cell_table
 from services.api.schemas import ErrorOut, objective_names
 from services.api.sweep_cells import mean_sd
 from services.store import dashboard_queries as dq

@@ -14,13 +14,13 @@ from fastapi.responses import FileResponse
 from services.api.dashboard_schemas import FrontOut, MotionOut
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.front_view import front_out
+from services.api.lookups import owned_job
 from services.api.points import (
     baseline_recording,
     point_metrics,
     point_motion,
     point_recording,
 )
-from services.api.routes.jobs import owned_job
 from services.api.schemas import ErrorOut
 from services.store import output_queries as oq
 from services.store import repository as repo

@@ -7,7 +7,6 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, HTTPException, Query, Response, status
 from fastapi.responses import FileResponse
-from sqlalchemy.orm import Session
 
 from services.api.convergence import convergence
 from services.api.deps import (
@@ -18,8 +17,7 @@ from services.api.deps import (
     IdPrefix,
     Pagination,
 )
-from services.api.errors import not_found
-from services.api.routes.robots import robot_lookup
+from services.api.lookups import owned_job, robot_lookup
 from services.api.schemas import (
     MAX_LIMIT,
     ErrorOut,
@@ -59,14 +57,6 @@ _404: dict[int | str, dict[str, Any]] = {
 }
 
 RECORDING = "recording"
-
-
-def owned_job(session: Session, job_id: str, owner_key_id: str) -> JobRecord:
-    """The caller's job ``job_id``; 404 when missing or another key's."""
-    job = repo.get_job(session, job_id, owner_key_id=owner_key_id)
-    if job is None:
-        raise not_found("job", job_id)
-    return job
 
 
 def _spec_examples() -> dict[str, dict[str, object]]:

@@ -6,7 +6,6 @@ from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Response, status
 from pydantic import BaseModel, Field
-from sqlalchemy.orm import Session
 
 from legcore.robots import LeggedRobot, Robot, catalog
 from services.api.deps import Context, CurrentKey, Pagination
@@ -24,7 +23,7 @@ from services.api.schemas import (
 )
 from services.api.spec_cache import build_robot_cached
 from services.api.study_fits import StudyFitOut, robot_fits
-from services.api.validation import RobotInfo, RobotLookup, robot_info, summarize_robot
+from services.api.validation import RobotInfo, robot_info, summarize_robot
 from services.api.validation_pool import check_robot
 from services.store import repository as repo
 from services.store.records import RobotRecord
@@ -85,24 +84,6 @@ class RobotValidationOut(RobotValidation):
 _404: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such robot (among yours)."}
 }
-
-
-def robot_lookup(session: Session, owner_key_id: str) -> RobotLookup:
-    """Resolve a job's ``robot`` reference among the caller's stored robots (id, then name)
-    into the document it stands for: a catalog name or an inline spec."""
-
-    def lookup(reference: str) -> str | dict[str, Any] | None:
-        record = repo.get_robot(session, reference, owner_key_id=owner_key_id)
-        if record is None:
-            record = repo.get_robot_by_name(session, owner_key_id=owner_key_id, name=reference)
-        if record is None:
-            return None
-        spec = record.spec
-        if isinstance(spec, dict) and "catalog" in spec:
-            return str(spec["catalog"])
-        return dict(spec) if isinstance(spec, dict) else None
-
-    return lookup
 
 
 def _out(record: RobotRecord) -> RobotOut:

@@ -6,7 +6,6 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Query
-from sqlalchemy.orm import Session
 
 from services.api.dashboard_schemas import (
     CellFront,
@@ -17,61 +16,17 @@ from services.api.dashboard_schemas import (
     quantities,
 )
 from services.api.deps import Context, CurrentKey
-from services.api.errors import invalid, not_found
-from services.api.quantities import describe
+from services.api.errors import invalid
+from services.api.lookups import cell_table, study_kind
 from services.api.schemas import ErrorOut
-from services.api.sweep_cells import CellTable, build_cells, mean_sd
-from services.api.sweeps import swept_paths
+from services.api.sweep_cells import mean_sd
 from services.store import output_queries as oq
-from services.store import repository as repo
-from services.store.records import JobRecord, SweepRecord
-from services.store.specs import shown_value, spec_value
-from services.store.tables import JobStatus
 
 router = APIRouter(tags=["dashboard"])
 
 _404: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such sweep (among yours)."}
 }
-#: Jobs a sweep can have (``services.api.sweeps.MAX_SWEEP_JOBS``); read in one page.
-_ALL = 1000
-
-
-def _sweep_jobs(
-    session: Session, key_id: str, sweep_id: str
-) -> tuple[SweepRecord, list[JobRecord]]:
-    sweep = repo.get_sweep(session, sweep_id, owner_key_id=key_id)
-    if sweep is None:
-        raise not_found("sweep", sweep_id)
-    page = repo.list_jobs(session, owner_key_id=key_id, sweep_id=sweep.id, limit=_ALL, offset=0)
-    return sweep, list(reversed(page.items))  # sweep order
-
-
-def cell_table(ctx: Any, key_id: str, sweep_id: str) -> tuple[SweepRecord, CellTable]:
-    """The sweep and its cells (shared by the page and the export)."""
-    with ctx.read() as session:
-        sweep, jobs = _sweep_jobs(session, key_id, sweep_id)
-        done = [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
-        results = repo.result_briefs(session, done)
-        fronts = oq.fronts_of(session, done)
-    axes = sweep.axes if isinstance(sweep.axes, dict) else {}
-    swept = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
-
-    def value(job: JobRecord, path: str) -> Any:
-        return shown_value(job.spec or sweep.base_spec, job.overrides, path)
-
-    kind = study_kind(sweep)
-    table = build_cells(
-        jobs, value, swept, results, fronts, sense=lambda n: describe(n, kind)["sense"]
-    )
-    return sweep, table
-
-
-def study_kind(sweep: SweepRecord) -> str | None:
-    """The study kind of a sweep's base spec."""
-    return spec_value(sweep.base_spec, None, "problem.kind")
-
-
 @router.get(
     "/sweeps/{sweep_id}/cells",
     response_model=SweepCellsOut,

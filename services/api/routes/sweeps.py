@@ -9,8 +9,8 @@ from fastapi.responses import FileResponse
 
 from services.api.deps import Context, CurrentKey, IdPrefix, Pagination
 from services.api.errors import VALIDATION_ERROR_SCHEMA, invalid, not_found
+from services.api.lookups import robot_lookup
 from services.api.merged_recordings import merged_recording
-from services.api.routes.robots import robot_lookup
 from services.api.schemas import (
     ErrorOut,
     Page,

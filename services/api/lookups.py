@@ -1,0 +1,148 @@
+"""What the routes share: the caller's job, sweep or robot by id (404 when missing or another
+key's), the jobs page's filters (a FastAPI dependency), a sweep's cell table and writing the
+labels of a key's new jobs. Routes import these from here, never from one another."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import Depends, Query
+from sqlalchemy.orm import Session
+
+from services.api.deps import ApiContext
+from services.api.errors import not_found
+from services.api.quantities import describe
+from services.api.sweep_cells import CellTable, build_cells
+from services.api.sweeps import swept_paths
+from services.api.validation import RobotLookup
+from services.store import dashboard_queries as dq
+from services.store import output_queries as oq
+from services.store import repository as repo
+from services.store.records import JobRecord, SweepRecord
+from services.store.specs import shown_value, spec_value
+from services.store.tables import JobStatus
+
+#: Jobs a sweep can have (``services.api.sweeps.MAX_SWEEP_JOBS``); read in one page.
+_ALL = 1000
+
+
+def owned_job(session: Session, job_id: str, owner_key_id: str) -> JobRecord:
+    """The caller's job ``job_id``; 404 when missing or another key's."""
+    job = repo.get_job(session, job_id, owner_key_id=owner_key_id)
+    if job is None:
+        raise not_found("job", job_id)
+    return job
+
+
+def owned_sweep_jobs(
+    session: Session, key_id: str, sweep_id: str
+) -> tuple[SweepRecord, list[JobRecord]]:
+    sweep = repo.get_sweep(session, sweep_id, owner_key_id=key_id)
+    if sweep is None:
+        raise not_found("sweep", sweep_id)
+    page = repo.list_jobs(session, owner_key_id=key_id, sweep_id=sweep.id, limit=_ALL, offset=0)
+    return sweep, list(reversed(page.items))  # sweep order
+
+
+def cell_table(ctx: ApiContext, key_id: str, sweep_id: str) -> tuple[SweepRecord, CellTable]:
+    """The sweep and its cells (shared by the page and the export)."""
+    with ctx.read() as session:
+        sweep, jobs = owned_sweep_jobs(session, key_id, sweep_id)
+        done = [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
+        results = repo.result_briefs(session, done)
+        fronts = oq.fronts_of(session, done)
+    axes = sweep.axes if isinstance(sweep.axes, dict) else {}
+    swept = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
+
+    def value(job: JobRecord, path: str) -> Any:
+        return shown_value(job.spec or sweep.base_spec, job.overrides, path)
+
+    kind = study_kind(sweep)
+    table = build_cells(
+        jobs, value, swept, results, fronts, sense=lambda n: describe(n, kind)["sense"]
+    )
+    return sweep, table
+
+
+def study_kind(sweep: SweepRecord) -> str | None:
+    """The study kind of a sweep's base spec."""
+    return spec_value(sweep.base_spec, None, "problem.kind")
+
+
+def robot_lookup(session: Session, owner_key_id: str) -> RobotLookup:
+    """Resolve a job's ``robot`` reference among the caller's stored robots (id, then name)
+    into the document it stands for: a catalog name or an inline spec."""
+
+    def lookup(reference: str) -> str | dict[str, Any] | None:
+        record = repo.get_robot(session, reference, owner_key_id=owner_key_id)
+        if record is None:
+            record = repo.get_robot_by_name(session, owner_key_id=owner_key_id, name=reference)
+        if record is None:
+            return None
+        spec = record.spec
+        if isinstance(spec, dict) and "catalog" in spec:
+            return str(spec["catalog"])
+        return dict(spec) if isinstance(spec, dict) else None
+
+    return lookup
+
+
+def sync_labels(ctx: ApiContext, owner_key_id: str) -> None:
+    """Write the labels of the key's new jobs (a read first: the write lock only when some are
+    missing)."""
+    with ctx.read() as session:
+        missing = dq.missing_labels(session, owner_key_id)
+    if missing:
+        with ctx.write() as session:
+            dq.sync_labels(session, owner_key_id)
+
+
+def job_filter(
+    status_: Annotated[
+        list[JobStatus] | None, Query(alias="status", description="Only these statuses.")
+    ] = None,
+    kind: Annotated[str | None, Query(max_length=64, description="Study kind.")] = None,
+    optimizer: Annotated[str | None, Query(max_length=32, description="Optimizer kind.")] = None,
+    robot: Annotated[str | None, Query(max_length=200, description="Robot name.")] = None,
+    sweep_id: Annotated[str | None, Query(max_length=64, description="Only this sweep.")] = None,
+    tag: Annotated[str | None, Query(max_length=100, description="Jobs with this tag.")] = None,
+    q: Annotated[
+        str | None,
+        Query(
+            max_length=200,
+            description="Words matched in name, kind, robot, optimizer, "
+            "tags, seed (`seed=3`), job and sweep ids.",
+        ),
+    ] = None,  # fmt: skip
+    feasible: Annotated[
+        bool | None,
+        Query(description="Only succeeded jobs whose optimum is feasible (true) / infeasible "
+              "(false)."),
+    ] = None,  # fmt: skip
+) -> dq.JobFilter:
+    """The filters of the jobs page (query parameters)."""
+    return dq.JobFilter(
+        status=tuple(status_ or ()),
+        kind=kind or None,
+        optimizer=optimizer or None,
+        robot=robot or None,
+        sweep_id=sweep_id or None,
+        tag=tag or None,
+        search=(q or "").strip() or None,
+        feasible=feasible,
+    )
+
+
+Filters = Annotated[dq.JobFilter, Depends(job_filter)]
+
+
+__all__ = [
+    "Filters",
+    "cell_table",
+    "job_filter",
+    "owned_job",
+    "owned_sweep_jobs",
+    "robot_lookup",
+    "study_kind",
+    "sync_labels",
+]
