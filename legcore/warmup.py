@@ -3,7 +3,8 @@
     python -m legcore.warmup            # e.g. in the image build, with NUMBA_CACHE_DIR set
 
 Runs one small job of every built-in study kind (its default robot and settings, a population
-of 8 for 1 generation, seed 000's baseline GAs for 1 generation) through the whole
+of 8 for 2 generations — the first and a steady-state one: MOEA/D's replacement, for one,
+runs from the second on —, seed 000's baseline GAs for 1 generation) through the whole
 ``legcore.run`` — evaluation, IK of the baselines and placements, decoding — so that every
 ``@numba.njit(cache=True)`` kernel is compiled with the signatures the jobs use and written to
 numba's cache (``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` next to the package). A later
@@ -29,7 +30,8 @@ _SMALL: dict[str, dict[str, Any]] = {
 
 def warmup_spec(kind: str, study: Any) -> dict[str, Any]:
     """A tiny job of ``kind``: its default optimiser with population 8 (MOEA/D: as many
-    subproblems as neighbours), one generation."""
+    subproblems as neighbours), two generations (MOEA/D's replacement and the GA's elitism
+    run from the second on)."""
     params = dict(study.default_optimizer["params"])
     for name in ("pop_size", "n_samples", "n_subproblems"):
         if name in params:
@@ -37,7 +39,7 @@ def warmup_spec(kind: str, study: Any) -> dict[str, Any]:
     return {
         "problem": {"kind": kind, **_SMALL.get(kind, {})},
         "optimizer": {"kind": study.default_optimizer["kind"], "params": params},
-        "budget": {"generations": 1},
+        "budget": {"generations": 2},
         "seed": 0,
     }
 

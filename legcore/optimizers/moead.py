@@ -33,6 +33,10 @@ as close as possible to the requested ``n_subproblems`` (ties: the larger); for 
 is exact, and for 3 objectives 300 subproblems (seed 002) is exact (``H = 23``). The actual
 number is ``pop_size`` after ``setup``.
 
+The replacement and the archive update are compiled (:mod:`legcore.optimizers.moead_kernels`;
+their numpy formulation, the reference they are tested against, is
+:mod:`legcore.optimizers.moead_reference`).
+
 Archive: the non-dominated feasible offspring are merged into EP every generation;
 ``archive_size`` (default: the population size) caps it by dropping the most crowded points
 (NSGA-II crowding distance); ``archive_size=0`` disables EP and the front is the non-dominated
@@ -48,8 +52,9 @@ from typing import Any, ClassVar
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from legcore.metrics import covers, crowding_distance, non_dominated_mask
+from legcore.metrics import non_dominated_mask
 from legcore.optimizers.base import Algorithm
+from legcore.optimizers.moead_kernels import replace, update_archive
 from legcore.optimizers.operators import polynomial_mutation, sbx
 from legcore.optimizers.params import check_float, check_int, check_optional_float
 
@@ -196,9 +201,6 @@ class MOEAD(Algorithm):
                                 prob_var=self._params["prob_mutation"])
         return p.snap(Y)
 
-    def _tchebycheff(self, F: np.ndarray, W: np.ndarray) -> np.ndarray:
-        return np.max(W * np.abs(F - self._z), axis=-1)
-
     def _tell(self, X: np.ndarray, F: np.ndarray, cv: np.ndarray) -> None:
         self._z = np.minimum(self._z, F.min(axis=0))
         if self._X.shape[0] == 0:
@@ -208,19 +210,7 @@ class MOEAD(Algorithm):
         self._update_archive(X, F, cv)
 
     def _replace(self, Y: np.ndarray, FY: np.ndarray, cvY: np.ndarray) -> None:
-        n, t = self.neighbors.shape
-        src = np.repeat(np.arange(n), t)          # offspring i ...
-        dst = self.neighbors.ravel()              # ... competing for subproblem j in B(i)
-        g = self._tchebycheff(FY[src], self.weights[dst])
-        c = cvY[src]
-        order = np.lexsort((src, g, c, dst))      # by j, then violation, then g, then i
-        first = np.r_[True, dst[order][1:] != dst[order][:-1]]
-        win = order[first]
-        j, i = dst[win], src[win]
-        g_cur = self._tchebycheff(self._F[j], self.weights[j])
-        c_cur = self._cv[j]
-        better = (c[win] < c_cur) | ((c[win] == c_cur) & (g[win] < g_cur))
-        j, i = j[better], i[better]
+        j, i = replace(self.neighbors, self.weights, self._z, self._F, self._cv, FY, cvY)
         self._X[j] = Y[i]
         self._F[j] = FY[i]
         self._cv[j] = cvY[i]
@@ -229,32 +219,10 @@ class MOEAD(Algorithm):
         cap = self._params["archive_size"]
         if cap == 0:
             return
-        if cap is None:
-            cap = self.pop_size
-        feas = cv <= 0.0
-        if not feas.any():
-            return
-        Xn, Fn = X[feas], F[feas]
-        keep = non_dominated_mask(Fn)
-        Xn, Fn = Xn[keep], Fn[keep]
-        _, first = np.unique(Fn, axis=0, return_index=True)
-        first = np.sort(first)
-        Xn, Fn = Xn[first], Fn[first]
-        A, AX = self._AF, self._AX
-        if A.shape[0]:
-            le_na = covers(Fn, A)  # new <= archive
-            le_an = covers(A, Fn)  # archive <= new
-            a_dominated = (le_na & ~le_an.T).any(axis=0)
-            n_covered = le_an.any(axis=0)                           # dominated or equal
-            AX = np.vstack([AX[~a_dominated], Xn[~n_covered]])
-            A = np.vstack([A[~a_dominated], Fn[~n_covered]])
-        else:
-            AX, A = Xn, Fn
-        if A.shape[0] > cap:
-            cd = crowding_distance(A)
-            keep_idx = np.sort(np.argsort(-cd, kind="stable")[:cap])
-            AX, A = AX[keep_idx], A[keep_idx]
-        self._AX, self._AF = AX, A
+        merged = update_archive(X, F, cv, self._AX, self._AF,
+                                self.pop_size if cap is None else cap)
+        if merged is not None:
+            self._AX, self._AF = merged
 
     def _front(self) -> tuple[np.ndarray, np.ndarray]:
         if self._params["archive_size"] != 0:

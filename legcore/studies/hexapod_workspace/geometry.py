@@ -24,7 +24,9 @@ Everything is vectorised over leading batch axes; leg order is the decision vect
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -38,6 +40,11 @@ from legcore.studies.hexapod_workspace.legs import (
     is_mirror_symmetric,
     tripod_from_robot,
 )
+from legcore.studies.hexapod_workspace.pose_kernel import (
+    ClosedFormTripod,
+    closed_form_pose_ik,
+    closed_form_reach,
+)
 
 __all__ = [
     "OTHER_STANCE",
@@ -45,6 +52,7 @@ __all__ = [
     "PoseWorkspace",
     "Tripod",
     "body_pose_ik",
+    "body_pose_ik_reference",
     "fit_body_motion",
     "is_mirror_symmetric",
     "mirror_front_back",
@@ -162,7 +170,57 @@ def body_pose_ik(
     Returns:
         ``q`` (*S, 3, 3) rad (leg-major, NaN where a leg cannot reach) and ``reachable``
         (*S, 3) per leg: the closed form of eqs (8)–(10) inside the joint limits.
+
+    Closed-form legs go through the compiled
+    :func:`~legcore.studies.hexapod_workspace.pose_kernel.closed_form_pose_ik` (the same
+    numbers as :func:`body_pose_ik_reference`, its numpy formulation); other legs through
+    :func:`body_pose_ik_reference` (the numerical IK).
     """
+    P = _feet(feet_world)
+    _check_knee(knee)
+    if not _compiled(tripod):
+        return body_pose_ik_reference(tripod, P, x, y, yaw, knee, q_ref)
+    x, y, yaw = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (x, y, yaw)))
+    return closed_form_pose_ik(*_kernel_args(tripod, P, knee), x, y, yaw)
+
+
+def _feet(feet_world: ArrayLike) -> FloatArray:
+    P = np.asarray(feet_world, dtype=float)
+    if P.shape != (3, 3):
+        raise ValueError(f"feet_world: expected shape (3, 3), got {P.shape}")
+    return P
+
+
+def _check_knee(knee: str) -> None:
+    if knee not in ("up", "down", "either"):
+        raise ValueError(f"knee: expected 'up', 'down' or 'either', got {knee!r}")
+
+
+def _compiled(tripod: Tripod) -> bool:
+    """The tripod's legs take the closed form (``Tripod.ik``'s rule): the compiled path."""
+    return tripod.closed_form or tripod.robots is None
+
+
+def _kernel_args(tripod: Tripod, P: FloatArray, knee: str) -> ClosedFormTripod:
+    """The closed-form tripod of :mod:`~legcore.studies.hexapod_workspace.pose_kernel`: legs,
+    fixed feet ``P`` (3, 3) m, knee branch and whether to try the other one."""
+    branch = KNEE_DOWN if knee == "down" else KNEE_UP
+    return (tripod.hips, tripod.L, tripod.q_min, tripod.q_max, P, float(branch),
+            knee == "either" and tripod.closed_form)
+
+
+def body_pose_ik_reference(
+    tripod: Tripod,
+    feet_world: ArrayLike,
+    x: ArrayLike,
+    y: ArrayLike,
+    yaw: ArrayLike,
+    knee: str = "up",
+    q_ref: ArrayLike | None = None,
+) -> tuple[FloatArray, BoolArray]:
+    """:func:`body_pose_ik` in numpy, through ``Tripod.to_leg_frames`` and ``Tripod.ik``: the
+    path of numerical-IK legs, and the reference the compiled closed-form path is tested
+    against (same arguments and results)."""
     P = np.asarray(feet_world, dtype=float)
     if P.shape != (3, 3):
         raise ValueError(f"feet_world: expected shape (3, 3), got {P.shape}")
@@ -192,17 +250,23 @@ class PoseWorkspace:
     """Body poses on a grid, reachable with the three stance feet fixed.
 
     ``x`` (nx,), ``y`` (ny,) m and ``yaw`` (nyaw,) rad grid axes; ``reachable`` (nyaw, ny, nx)
-    bool (all three legs inside their joint limits); ``q`` (nyaw, ny, nx, 3, 3) joint angles
-    (NaN where not reachable); ``feet_world`` (3, 3) the fixed feet; ``knee`` the branch rule.
+    bool (all three legs inside their joint limits); ``feet_world`` (3, 3) the fixed feet;
+    ``knee`` the branch rule; ``angles`` gives :attr:`q`.
     """
 
     x: FloatArray
     y: FloatArray
     yaw: FloatArray
     reachable: BoolArray
-    q: FloatArray
     feet_world: FloatArray
     knee: str
+    angles: Callable[[], FloatArray] = field(repr=False)
+
+    @cached_property
+    def q(self) -> FloatArray:
+        """(nyaw, ny, nx, 3, 3) joint angles, rad (NaN where not reachable); closed-form legs
+        compute them on first access (the masks and areas do not need them)."""
+        return self.angles()
 
     @property
     def cell_area(self) -> float:
@@ -250,11 +314,11 @@ class PoseWorkspace:
             "y_range": ext[:, 2:].tolist(),
             "touches_grid_edge": self.touches_edge(),
         }
-        if masks:
-            out["masks"] = [
-                ["".join("1" if v else "0" for v in row) for row in plane]
-                for plane in self.reachable
-            ]
+        if masks:  # one '0'/'1' character per cell, cut into rows (no loop over cells)
+            nyaw, ny, nx = self.reachable.shape
+            text = (np.asarray(self.reachable, dtype=np.uint8) + 48).tobytes().decode("ascii")
+            rows = [text[i:i + nx] for i in range(0, nyaw * ny * nx, nx)]
+            out["masks"] = [rows[k * ny:(k + 1) * ny] for k in range(nyaw)]
         return out
 
 
@@ -275,7 +339,20 @@ def pose_workspace(
         if v.size == 0 or not np.all(np.isfinite(v)):
             raise ValueError(f"{name}: expected a non-empty finite grid axis")
     Yaw, Y, X = np.meshgrid(yaws, ys, xs, indexing="ij")
-    q, ok = body_pose_ik(tripod, feet_world, X, Y, Yaw, knee=knee, q_ref=q_ref)
-    reach: BoolArray = np.asarray(ok.all(axis=-1), dtype=bool)
-    q = np.where(reach[..., None, None], q, np.nan)
-    return PoseWorkspace(xs, ys, yaws, reach, q, np.asarray(feet_world, dtype=float).copy(), knee)
+    P = _feet(feet_world).copy()  # the workspace's own: its q may be computed later
+    _check_knee(knee)
+    if _compiled(tripod):
+        args = _kernel_args(tripod, P, knee)
+        reach = closed_form_reach(*args, X, Y, Yaw)
+
+        def angles() -> FloatArray:
+            Yaw, Y, X = np.meshgrid(yaws, ys, xs, indexing="ij")
+            return closed_form_pose_ik(*args, X, Y, Yaw, all_legs=False)[0]
+    else:
+        q, ok = body_pose_ik_reference(tripod, P, X, Y, Yaw, knee=knee, q_ref=q_ref)
+        reach = np.asarray(ok.all(axis=-1), dtype=bool)
+        q = np.where(reach[..., None, None], q, np.nan)
+
+        def angles() -> FloatArray:
+            return q
+    return PoseWorkspace(xs, ys, yaws, reach, P, knee, angles)
