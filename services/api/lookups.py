@@ -87,6 +87,17 @@ def robot_lookup(session: Session, owner_key_id: str) -> RobotLookup:
     return lookup
 
 
+def study_defaults(kind: str) -> tuple[str, str] | None:
+    """A study kind's default robot and optimizer kind (what a job's labels show when its spec
+    names neither), from the study registry; None for an unknown kind."""
+    from legcore.studies.registry import studies
+
+    study = studies().get(kind)
+    if study is None:
+        return None
+    return str(study.default_robot), str(study.default_optimizer.get("kind", ""))
+
+
 def sync_labels(ctx: ApiContext, owner_key_id: str) -> None:
     """Write the labels of the key's new jobs (a read first: the write lock only when some are
     missing)."""
@@ -94,7 +105,7 @@ def sync_labels(ctx: ApiContext, owner_key_id: str) -> None:
         missing = dq.missing_labels(session, owner_key_id)
     if missing:
         with ctx.write() as session:
-            dq.sync_labels(session, owner_key_id)
+            dq.sync_labels(session, owner_key_id, study_defaults)
 
 
 def job_filter(
@@ -143,6 +154,7 @@ __all__ = [
     "owned_job",
     "owned_sweep_jobs",
     "robot_lookup",
+    "study_defaults",
     "study_kind",
     "sync_labels",
 ]

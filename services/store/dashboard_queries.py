@@ -16,19 +16,37 @@ from __future__ import annotations
 
 import base64
 import binascii
+import itertools
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any, Literal
 
-from sqlalchemy import ColumnElement, Select, func, insert, literal, select, tuple_
+from sqlalchemy import (
+    ColumnElement,
+    FromClause,
+    Select,
+    column,
+    func,
+    insert,
+    literal,
+    literal_column,
+    select,
+    table,
+    tuple_,
+)
+from sqlalchemy.ext.compiler import compiles
 from sqlalchemy.orm import Session
+from sqlalchemy.sql.compiler import SQLCompiler
+from sqlalchemy.sql.selectable import Join
 
 from services.store.records import JobRecord
 from services.store.tables import (
     JOB_LABELS,
     JOBS,
+    MIN_INDEXED_WORD,
+    SEARCH_FTS,
     SWEEPS,
     JobStatus,
 )
@@ -46,23 +64,30 @@ SORT_KEYS: tuple[str, ...] = (
 # --------------------------------------------------------------------------- labels
 
 
-def label_values(base: Any, overrides: Mapping[str, Any] | None) -> dict[str, Any]:
+#: A study kind's default robot and optimizer kind, or None for a kind nobody knows. The
+#: store knows no study: the caller (the API, from the study registry) hands this in.
+StudyDefaults = Callable[[str], "tuple[str, str] | None"]
+
+
+def label_values(
+    base: Any, overrides: Mapping[str, Any] | None, defaults: StudyDefaults
+) -> dict[str, Any]:
     """The labels of a job whose spec is ``base`` with ``overrides`` applied: ``kind``,
     ``robot`` (catalog or robot name; the study's default robot when none), ``optimizer``
-    (the study's default when none), ``name``, ``seed`` and ``tags`` (comma-joined)."""
-    from legcore.studies.registry import studies
+    (the study's default when none), ``name``, ``seed`` and ``tags`` (comma-joined);
+    ``defaults(kind)`` gives the study's default robot and optimizer."""
     from services.store.specs import spec_value
 
     kind = str(spec_value(base, overrides, "problem.kind") or "")
-    study = studies().get(kind)
+    default_robot, default_optimizer = defaults(kind) or ("", "")
     robot = spec_value(base, overrides, "robot")
     if isinstance(robot, dict):
         robot = robot.get("name") or robot.get("catalog") or "inline"
     if robot is None:
-        robot = study.default_robot if study is not None else ""
+        robot = default_robot
     optimizer = spec_value(base, overrides, "optimizer.kind")
     if optimizer is None:
-        optimizer = study.default_optimizer.get("kind", "") if study is not None else ""
+        optimizer = default_optimizer
     name = spec_value(base, overrides, "name")
     seed = spec_value(base, overrides, "seed")
     tags = spec_value(base, overrides, "tags")
@@ -83,8 +108,11 @@ def _search_text(job_id: str, sweep_id: str | None, labels: Mapping[str, Any]) -
     return " ".join(p for p in parts if p).lower()
 
 
-def sync_labels(session: Session, owner_key_id: str, *, full: bool = False) -> int:
-    """Write the missing ``job_labels`` rows of a key's jobs; the number written.
+def sync_labels(
+    session: Session, owner_key_id: str, defaults: StudyDefaults, *, full: bool = False
+) -> int:
+    """Write the missing ``job_labels`` rows of a key's jobs; the number written
+    (``defaults``: as for :func:`label_values`).
 
     Only jobs created since the newest labelled one (less ``LABEL_SLACK``) are looked at, so
     the cost is that of the new jobs, not of all of them; ``full`` checks every job (after an
@@ -112,7 +140,7 @@ def sync_labels(session: Session, owner_key_id: str, *, full: bool = False) -> i
     values = []
     for r in missing:
         base = r.spec if r.spec is not None else bases.get(r.sweep_id or "", {})
-        labels = label_values(base, None if r.spec is not None else r.overrides)
+        labels = label_values(base, None if r.spec is not None else r.overrides, defaults)
         values.append(
             {
                 "job_id": r.id,
@@ -194,13 +222,89 @@ def _like(text: str) -> str:
     return f"%{escaped}%"
 
 
+def _search_words(search: str | None) -> list[str]:
+    """The words of a search (lower-cased, at most 8): a job matches when its text contains
+    every one."""
+    return [w.lower() for w in (search or "").split()[:8]]
+
+
+# ----------------------------------------------------------------- word search by index
+# PostgreSQL answers the LIKE of each word from the pg_trgm GIN index (revision 0009): the query
+# does not change. SQLite answers words of 3 characters or more from the FTS5 trigram table
+# ``job_labels_fts`` (a phrase of a word matches where LIKE '%word%' does, the text and words
+# being lower-cased); shorter words — which no trigram can answer — and stores without the
+# table (SQLite without FTS5 / trigram) keep LIKE. The matches drive the query (``_CrossJoin``:
+# SQLite's planner, without statistics, would otherwise walk the key's whole index and probe
+# each row): counted up to COUNT_CAP + 1, then sorted by their keys alone and the page's rows
+# read. A word in more than COUNT_CAP of the key's jobs is frequent enough that walking the
+# page's order and checking each row by LIKE finds a page sooner than sorting every match, so
+# that page is read the old way.
+
+_FTS = table(SEARCH_FTS, column("rowid"))
+_HAS_FTS = "legopt_search_fts"  # key of the answer in a DBAPI connection's info
+
+
+class _CrossJoin(Join):
+    """``left CROSS JOIN right ON onclause``: SQLite keeps ``left`` as the outer loop."""
+
+    inherit_cache = True
+
+
+@compiles(_CrossJoin, "sqlite")
+def _compile_cross_join(element: _CrossJoin, compiler: SQLCompiler, **kw: Any) -> str:
+    kw.pop("asfrom", None)
+    linter = kw.get("from_linter")
+    if linter is not None:  # as SQLCompiler.visit_join: the two sides are joined
+        linter.edges.update(
+            itertools.product(element.left._from_objects, element.right._from_objects)
+        )
+    left = compiler.process(element.left, asfrom=True, **kw)
+    right = compiler.process(element.right, asfrom=True, **kw)
+    assert element.onclause is not None
+    return f"{left} CROSS JOIN {right} ON {compiler.process(element.onclause, **kw)}"
+
+
+def _search_fts(session: Session) -> bool:
+    """True if this SQLite store has the FTS table of the search (asked once per connection)."""
+    conn = session.connection()
+    if conn.dialect.name != "sqlite":
+        return False
+    if _HAS_FTS not in conn.info:
+        found = conn.exec_driver_sql(
+            "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", (SEARCH_FTS,)
+        ).first()
+        conn.info[_HAS_FTS] = found is not None
+    return bool(conn.info[_HAS_FTS])
+
+
+def _fts_query(words: list[str]) -> str | None:
+    """The FTS5 query of the words an index can answer (each one a quoted phrase: every
+    character literal), None when there is none."""
+    long = [w for w in words if len(w) >= MIN_INDEXED_WORD]
+    return " ".join('"' + w.replace('"', '""') + '"' for w in long) or None
+
+
+def _fts_driven(query: str, mixed: bool) -> tuple[FromClause, ColumnElement[bool]]:
+    """The FROM clause that walks the FTS matches first (then their labels by rowid, then
+    their jobs when ``mixed``) and the MATCH condition."""
+    rowid: ColumnElement[int] = literal_column(f"{JOB_LABELS.name}.rowid")
+    source: FromClause = _CrossJoin(_FTS, JOB_LABELS, _FTS.c.rowid == rowid)
+    if mixed:
+        source = _CrossJoin(source, JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
+    return source, literal_column(SEARCH_FTS).match(query)
+
+
 def _label_filtered(f: JobFilter) -> bool:
     """True when a filter needs the labels (then they drive the query), False when the jobs
     table's own indexes answer it (status, sweep, or none)."""
     return bool(f.kind or f.optimizer or f.robot or f.tag or f.search)
 
 
-def _conditions(owner_key_id: str, f: JobFilter, by_labels: bool) -> list[ColumnElement[bool]]:
+def _conditions(
+    owner_key_id: str, f: JobFilter, by_labels: bool, indexed: bool = False
+) -> list[ColumnElement[bool]]:
+    """The WHERE of a filter; ``indexed``: the search's long words are matched by the FTS
+    table (``_fts_driven``), only the short ones here."""
     owner = JOB_LABELS.c.owner_key_id if by_labels else JOBS.c.owner_key_id
     c: list[ColumnElement[bool]] = [owner == owner_key_id]
     if f.status:
@@ -218,9 +322,13 @@ def _conditions(owner_key_id: str, f: JobFilter, by_labels: bool) -> list[Column
     if f.tag:
         tags = literal(",") + JOB_LABELS.c.tags + literal(",")
         c.append(tags.like(_like(f",{f.tag},"), escape="\\"))
-    if f.search:
-        for word in f.search.split()[:8]:
-            c.append(JOB_LABELS.c.search.like(_like(word.lower()), escape="\\"))
+    for word in _search_words(f.search):
+        if not (indexed and len(word) >= MIN_INDEXED_WORD):
+            # the pattern inline, not a parameter: PostgreSQL then plans each search for its
+            # words (the trigram index for a rare one, the page's order for a frequent one),
+            # never a generic plan that would read the index for a word it cannot answer
+            pattern = literal(_like(word), literal_execute=True)
+            c.append(JOB_LABELS.c.search.like(pattern, escape="\\"))
     return c
 
 
@@ -238,6 +346,9 @@ def _sort_column(sort: str, by_labels: bool) -> ColumnElement[Any]:
         "best": JOBS.c.best_value,
     }[sort]
 
+
+#: Sort keys whose column is the jobs table's.
+_JOB_SORTS = frozenset({"finished", "status", "progress", "best"})
 
 #: Sort keys whose column can be NULL (a job not finished, no generation yet): NULLs come last
 #: in either direction.
@@ -371,6 +482,7 @@ def list_job_rows(
     offset: int = 0,
     cursor: str | None = None,
     count: bool = True,
+    search_index: bool = True,
 ) -> JobRowPage:
     """A page of a key's jobs (labels synced first by the caller: :func:`sync_labels`).
 
@@ -380,26 +492,44 @@ def list_job_rows(
     last; ``cursor`` (a page's ``next_cursor``, same sort and order) continues after the last
     row of the previous page in O(limit) whatever the depth; ``offset`` pages by counting
     (O(offset)). ``total`` counts at most ``COUNT_CAP + 1`` matches (``count`` False: not at
-    all, -1; the export streams pages without it)."""
+    all, -1; the export streams pages without it). A search reads its index (see "word search
+    by index" above); ``search_index`` False matches every word by LIKE instead (the same
+    rows: the reference of the tests and the benchmark)."""
     if sort not in SORT_KEYS:
         raise ValueError(f"sort: expected one of {', '.join(SORT_KEYS)}, got {sort!r}")
     by_labels = _label_filtered(f) or sort in ("kind", "robot", "optimizer")
-    conditions = _conditions(owner_key_id, f, by_labels)
-    joined = (
-        JOB_LABELS.join(JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
-        if by_labels
-        else JOBS.join(JOB_LABELS, JOB_LABELS.c.job_id == JOBS.c.id)
-    )
+    # conditions on both tables
+    mixed = by_labels and bool(f.status or f.sweep_id or f.feasible is not None)
     labels = [JOB_LABELS.c[c] for c in ("name", "kind", "robot", "optimizer", "seed", "tags")]
-    stmt = select(JOBS, *labels).select_from(joined).where(*conditions)
     total = -1
-    if count:
-        # conditions on both tables
-        mixed = by_labels and bool(f.status or f.sweep_id or f.feasible is not None)
-        source = joined if mixed else JOB_LABELS if by_labels else JOBS
-        matches = select(literal(1)).select_from(source).where(*conditions)
+    stmt: Select[Any] | None = None
+    keys_first = False  # stmt selects the page's ids: its rows are read after the sort
+    fts = _fts_query(_search_words(f.search)) if search_index and f.search else None
+    if fts is not None and _search_fts(session):
+        conditions = _conditions(owner_key_id, f, by_labels, indexed=True)
+        source, match = _fts_driven(fts, mixed)
+        matches = select(literal(1)).select_from(source).where(match, *conditions)
         capped = matches.limit(COUNT_CAP + 1).subquery()
-        total = int(session.execute(select(func.count()).select_from(capped)).scalar_one())
+        n = int(session.execute(select(func.count()).select_from(capped)).scalar_one())
+        total = n if count else -1
+        if n <= COUNT_CAP:  # else a frequent word: walk the page's order (LIKE), below
+            source, match = _fts_driven(fts, mixed or sort in _JOB_SORTS)
+            keys = select(JOB_LABELS.c.job_id.label("id")).select_from(source)
+            stmt = keys.where(match, *conditions)
+            keys_first = True
+    if stmt is None:
+        conditions = _conditions(owner_key_id, f, by_labels)
+        joined = (
+            JOB_LABELS.join(JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
+            if by_labels
+            else JOBS.join(JOB_LABELS, JOB_LABELS.c.job_id == JOBS.c.id)
+        )
+        stmt = select(JOBS, *labels).select_from(joined).where(*conditions)
+        if count and total < 0:
+            source = joined if mixed else JOB_LABELS if by_labels else JOBS
+            matches = select(literal(1)).select_from(source).where(*conditions)
+            capped = matches.limit(COUNT_CAP + 1).subquery()
+            total = int(session.execute(select(func.count()).select_from(capped)).scalar_one())
     order = _Order(sort, descending, by_labels)
     if cursor is not None or offset == 0:  # one more row than asked: is there a next page?
         rows = _keyset_rows(session, stmt, order, limit + 1, cursor)
@@ -407,6 +537,8 @@ def list_job_rows(
     else:
         page = stmt.order_by(*order.order_by(nulls_last=True)).limit(limit + 1).offset(offset)
         rows = list(session.execute(page).mappings())
+    if keys_first:
+        rows = _rows_by_id(session, [r["id"] for r in rows], labels)
     more, rows = len(rows) > limit, rows[:limit]
     items = tuple(
         JobRow(
@@ -427,6 +559,16 @@ def list_job_rows(
     return JobRowPage(items, total, limit, offset, next_cursor)
 
 
+def _rows_by_id(session: Session, ids: list[str], labels: list[Any]) -> list[Any]:
+    """The page rows (job and labels) of ``ids``, in that order."""
+    if not ids:
+        return []
+    joined = JOB_LABELS.join(JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
+    q = select(JOBS, *labels).select_from(joined).where(JOB_LABELS.c.job_id.in_(ids))
+    found = {r["id"]: r for r in session.execute(q).mappings()}
+    return [found[i] for i in ids if i in found]
+
+
 def _job_record(row: Any) -> JobRecord:
     from services.store.sql import to_record
 
@@ -443,6 +585,7 @@ __all__ = [
     "NULLABLE_SORTS",
     "decode_cursor",
     "encode_cursor",
+    "StudyDefaults",
     "label_values",
     "list_job_rows",
     "missing_labels",

@@ -23,6 +23,7 @@ from fastapi.testclient import TestClient
 
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.api.lookups import study_defaults
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
 from services.store.keys import generate_api_key
@@ -131,8 +132,8 @@ def test_labels_are_written_once_for_new_jobs(env: dict[str, Any]) -> None:
         key_id = repo.get_job(s, env["job"]).owner_key_id  # type: ignore[union-attr]
         assert not dq.missing_labels(s, key_id)
     with ctx.write() as s:
-        assert dq.sync_labels(s, key_id) == 0
-        assert dq.sync_labels(s, key_id, full=True) == 0
+        assert dq.sync_labels(s, key_id, study_defaults) == 0
+        assert dq.sync_labels(s, key_id, study_defaults, full=True) == 0
 
 
 def test_front_has_named_objectives_baselines_and_hypervolume(env: dict[str, Any]) -> None:

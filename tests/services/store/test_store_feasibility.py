@@ -14,6 +14,7 @@ from sqlalchemy import Engine, create_engine, text
 from sqlalchemy.orm import sessionmaker
 from store_testdb import sqlite_url
 
+from services.api.lookups import study_defaults
 from services.store import dashboard_queries as dq
 from services.store import migrate
 from services.store import repository as repo
@@ -73,7 +74,7 @@ def test_finish_job_writes_the_verdict_and_the_lists_filter_by_it(engine: Engine
         assert got is not None and got.feasible is True and got.violations == []
         listed = {f: [j.id for j in repo.list_jobs(s, owner_key_id=key_id, feasible=f).items]
                   for f in (None, True, False)}  # fmt: skip
-        dq.sync_labels(s, key_id)
+        dq.sync_labels(s, key_id, study_defaults)
         pages = {
             f: [r.job.id for r in dq.list_job_rows(s, key_id, dq.JobFilter(feasible=f)).items]
             for f in (True, False)
@@ -109,7 +110,7 @@ def test_the_feasible_filter_reads_its_index(tmp_path: Path) -> None:
     from sqlalchemy import event
 
     with sessionmaker(engine)() as s:
-        dq.sync_labels(s, key_id)
+        dq.sync_labels(s, key_id, study_defaults)
         conn = s.connection()
 
         def capture(_c: object, _cur: object, stmt: str, params: object, *_: object) -> None:

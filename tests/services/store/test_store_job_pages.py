@@ -15,6 +15,7 @@ from sqlalchemy import Engine, bindparam, text, update
 from sqlalchemy.orm import Session, sessionmaker
 from store_testdb import sqlite_url
 
+from services.api.lookups import study_defaults
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
 from services.store.lifecycle import first_objective
@@ -55,7 +56,7 @@ def _fill(session: Session, key_id: str) -> None:
                 finished_at=bindparam("fin", type_=JOBS.c.finished_at.type))
     )  # fmt: skip
     session.connection().execute(stmt, rows)
-    dq.sync_labels(session, key_id)
+    dq.sync_labels(session, key_id, study_defaults)
 
 
 def _value(row: dq.JobRow, sort: str) -> Any:
