@@ -252,6 +252,29 @@ class CatalogEntry(BaseModel):
 # --------------------------------------------------------------------------- jobs
 
 
+class JobFacts(BaseModel):
+    """What the job is, as its validation found it at submission (stored once)."""
+
+    kind: str = Field(description="The study kind.")
+    robot: str = Field(description="The robot's name (the study's default when none given).")
+    optimizer: str = Field(description="The optimizer kind (the study's default when none).")
+    objectives: list[str] = Field(
+        description="Objective names, in the order of best_objective and of the front's "
+        "columns (all minimised)."
+    )
+    n_var: int = Field(description="Number of decision variables.")
+
+    @classmethod
+    def from_stored(cls, facts: Any) -> JobFacts | None:
+        """The stored facts of a job, or None (a job stored before they were kept)."""
+        if not isinstance(facts, dict):
+            return None
+        try:
+            return cls.model_validate(facts)
+        except ValueError:
+            return None
+
+
 class JobOut(BaseModel):
     """A job: status, progress, best objective so far, the verdict (``feasible``, ``violations``)
     once it succeeded, attempts, error, warnings, times."""
@@ -276,6 +299,11 @@ class JobOut(BaseModel):
     created_at: datetime
     started_at: datetime | None = None
     finished_at: datetime | None = None
+    facts: JobFacts | None = Field(
+        default=None,
+        description="What the job is (kind, robot, optimizer, objective names, n_var), as "
+        "found at submission; null for jobs stored before it was kept.",
+    )
 
     @classmethod
     def from_record(cls, job: JobRecord, spec: Any = None) -> JobOut:
@@ -303,6 +331,7 @@ class JobOut(BaseModel):
             created_at=job.created_at,
             started_at=job.started_at,
             finished_at=job.finished_at,
+            facts=JobFacts.from_stored(job.facts),
         )
 
 
@@ -611,6 +640,7 @@ __all__ = [
     "DEFAULT_LIMIT",
     "MAX_LIMIT",
     "ArtifactOut",
+    "JobFacts",
     "BaselineOut",
     "CatalogEntry",
     "ErrorOut",

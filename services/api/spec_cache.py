@@ -98,7 +98,9 @@ class SpecCache:
     models: dict[tuple[str, str], Any] = field(default_factory=dict)
     failures: dict[tuple[str, str], Errors] = field(default_factory=dict)
     problems: dict[tuple[str, str], Any] = field(default_factory=dict)
-    sizes: dict[tuple[str, ...], tuple[int, JobSize] | Errors] = field(default_factory=dict)
+    sizes: dict[tuple[str, ...], tuple[int, JobSize, dict[str, Any]] | Errors] = field(
+        default_factory=dict
+    )
     stats: dict[str, int] = field(default_factory=dict)
 
     def charge(self, text_chars: int, loc: tuple[str | int, ...]) -> None:

@@ -21,7 +21,7 @@ from pydantic import ValidationError
 from legcore.jobspec import JobSpec, parse_job_spec, spec_error_locations
 from legcore.robots import LeggedRobot, Robot, build_any_robot, catalog, parse_robot_spec
 from legcore.robots.capabilities import capabilities
-from legcore.runner import JobSize, job_size, prepare
+from legcore.runner import JobSize, Prepared, job_size, prepare
 from legcore.studies.registry import plugin_errors
 from services.api.errors import (
     Loc,
@@ -157,11 +157,26 @@ def check_robot_doc(catalog_name: str | None, spec: Any) -> RobotInfo:
 
 @dataclass(frozen=True)
 class CheckedJob:
-    """A job spec that passed every check: the document to store and its size."""
+    """A job spec that passed every check: the document to store, its size and what the check
+    learned of it (``job_facts``: stored with the job, so nothing re-derives it)."""
 
     spec: dict[str, Any]
     total_generations: int
     size: JobSize
+    facts: dict[str, Any]
+
+
+def job_facts(prepared: Prepared) -> dict[str, Any]:
+    """What a prepared job is, in plain data: study ``kind``, ``robot`` (its name),
+    ``optimizer`` (kind; the study's default filled in), ``objectives`` (names, minimised, in
+    the front's column order) and ``n_var`` (decision variables)."""
+    return {
+        "kind": prepared.spec.problem.kind,
+        "robot": str(prepared.robot.name),
+        "optimizer": prepared.algorithm.kind,
+        "objectives": [str(n) for n in prepared.problem.objective_names],
+        "n_var": int(prepared.problem.n_var),
+    }
 
 
 def resolve_robot(doc: dict[str, Any], lookup: RobotLookup, prefix: Loc) -> dict[str, Any]:
@@ -343,7 +358,7 @@ def check_job_spec(
         memo.sizes[size_key] = found
     if isinstance(found, list):
         raise validation_error(found)
-    total, size = found
+    total, size, facts = found
 
     reason = settings.check_job_size(
         size.population, size.generations, size.samples, size.peak_bytes
@@ -352,7 +367,7 @@ def check_job_spec(
         raise _memory_error(reason, size, doc, prefix)
     if reason is not None:
         raise invalid(_size_loc(reason, doc, prefix), f"job too large: {reason}", "job_too_large")
-    return CheckedJob(spec=doc, total_generations=total, size=size)
+    return CheckedJob(spec=doc, total_generations=total, size=size, facts=facts)
 
 
 def _parse(
@@ -392,12 +407,13 @@ def _prepare_and_size(
     robot: Robot | LeggedRobot | None,
     problems: dict[tuple[str, str], Any],
     problem_key: tuple[str, str],
-) -> tuple[int, JobSize]:
-    """``legcore.runner.prepare`` + ``job_size`` reusing an already built robot and study
-    problem; errors as 422s located under ``prefix``."""
+) -> tuple[int, JobSize, dict[str, Any]]:
+    """``legcore.runner.prepare`` + ``job_size`` (+ ``job_facts``) reusing an already built
+    robot and study problem; errors as 422s located under ``prefix``."""
     try:
         prepared = prepare(spec, robot=robot, build_problem=problem_builder(problems, problem_key))
         size = job_size(prepared)
+        facts = job_facts(prepared)
     except ValidationError as exc:
         raise validation_error(_job_errors(exc, doc, prefix)) from None
     except ValueError as exc:
@@ -408,7 +424,7 @@ def _prepare_and_size(
             (*prefix, "problem"), f"the job cannot be prepared: {type(exc).__name__}: {exc}"
         ) from None
     total = prepared.total_generations
-    return (int(total) if total is not None else int(size.generations)), size
+    return (int(total) if total is not None else int(size.generations)), size, facts
 
 
 def _prepare_error(exc: ValueError, prefix: Loc) -> Exception:
@@ -431,6 +447,7 @@ def example_specs() -> dict[str, dict[str, Any]]:
 
 __all__: Sequence[str] = [
     "CheckedJob",
+    "job_facts",
     "RobotInfo",
     "RobotLookup",
     "RobotSummary",

@@ -60,10 +60,8 @@ from services.api.sweeps import SweepPoint
 from services.api.validation import (
     CheckedJob,
     RobotInfo,
-    RobotLookup,
     check_job_spec,
     check_robot_doc,
-    stored_references,
 )
 from services.store.settings import Settings
 
@@ -358,12 +356,14 @@ def _robot_loc(doc: Any, prefix: Loc) -> Loc:
 # --------------------------------------------------------------------------- the routes' calls
 
 
-def check_job(doc: Any, *, settings: Settings, key_id: str, lookup: RobotLookup) -> CheckedJob:
-    """``POST /jobs``: ``check_job_spec(doc)`` in a validation process (stored robots looked
-    up here first)."""
-    table = stored_references([doc], lookup)
+def check_job(
+    doc: Any, *, settings: Settings, key_id: str, references: dict[str, Any]
+) -> CheckedJob:
+    """``POST /jobs``: ``check_job_spec(doc)`` in a validation process; ``references``: the
+    stored robots it names (``validation.stored_references``, read by the caller before, so no
+    database transaction stays open while the process validates)."""
     loc = _robot_loc(doc, ("body",))
-    return pool(settings).run(key_id, settings, loc, _check_job, doc, table, settings)
+    return pool(settings).run(key_id, settings, loc, _check_job, doc, references, settings)
 
 
 def check_sweep(
@@ -372,13 +372,13 @@ def check_sweep(
     relocate: Relocate,
     settings: Settings,
     key_id: str,
-    lookup: RobotLookup,
+    references: dict[str, Any],
     prefix: Loc,
 ) -> list[CheckedJob]:
     """``POST /sweeps``: every point checked in ONE validation process call (one cache: each
     distinct robot built once); errors moved by ``relocate`` (a module-level function) to the
-    override that caused them, each distinct one once."""
-    table = stored_references([p.spec for p in points], lookup)
+    override that caused them, each distinct one once; ``references`` as for ``check_job``."""
+    table = references
     loc = _robot_loc(points[0].spec if points else None, prefix)
     return pool(settings).run(
         key_id, settings, loc, _check_sweep, list(points), table, settings, relocate, prefix

@@ -53,6 +53,7 @@ __all__ = [
     "best_text",
     "fmt",
     "objective_names_for",
+    "objective_names_of",
     "full_tables",
     "summary_block",
 ]
@@ -205,6 +206,17 @@ class ResultView:
 
 
 # ------------------------------------------------------------------ progress
+def objective_names_of(job: dict[str, Any]) -> list[str] | None:
+    """The objective names of a job as the API answers it: from what its submission stored
+    (``facts``); for a job stored before that, from its spec or its study kind (which builds
+    the study here)."""
+    facts = job.get("facts")
+    if isinstance(facts, dict) and isinstance(facts.get("objectives"), list):
+        return [str(n) for n in facts["objectives"]]
+    spec = job.get("spec")
+    return objective_names_for(spec if isinstance(spec, dict) else job.get("kind"))
+
+
 def objective_names_for(spec: dict[str, Any] | str | None) -> list[str] | None:
     """The objective names of a job spec (or of a study kind's defaults), from the study itself
     (cached; None when the spec cannot be built here, e.g. it names a stored robot)."""

@@ -27,7 +27,7 @@ from services.cli.display import (
     ResultView,
     best_text,
     full_tables,
-    objective_names_for,
+    objective_names_of,
     summary_block,
 )
 from services.cli.views import job_block, job_title, jobs_table, short, sweep_table
@@ -301,7 +301,7 @@ def follow(c: Any, jobs: list[dict[str, Any]], labels: list[str]) -> list[dict[s
     show it (a maximised quantity positive)."""
     from services.client import TERMINAL
 
-    names = {j["id"]: objective_names_for(j.get("spec")) for j in jobs}
+    names = {j["id"]: objective_names_of(j) for j in jobs}
     final: dict[str, dict[str, Any]] = {}
     with Progress(
         TextColumn("[bold]{task.description}"),
@@ -321,7 +321,7 @@ def follow(c: Any, jobs: list[dict[str, Any]], labels: list[str]) -> list[dict[s
                     continue
                 job = api_call(c.job, jid)
                 if names[jid] is None:
-                    names[jid] = objective_names_for(job.get("spec"))
+                    names[jid] = objective_names_of(job)
                 best = best_text(names[jid], job.get("best_objective"))
                 bar.update(tasks[jid], total=job.get("total_generations") or None,
                            completed=job.get("generation", 0),

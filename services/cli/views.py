@@ -10,7 +10,7 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from services.cli.display import best_text, fmt, objective_names_for
+from services.cli.display import best_text, fmt, objective_names_of
 from services.verdict import violations_text
 
 __all__ = [
@@ -94,7 +94,7 @@ def job_block(job: dict[str, Any]) -> Table:
         t.add_row("verdict", Text("feasible: the optimum meets every constraint", style="green"))
     pct = f" ({100 * job.get('progress', 0):.0f} %)" if job.get("total_generations") else ""
     t.add_row("progress", f"{progress_text(job)} generations{pct}")
-    t.add_row("best", best_text(objective_names_for(spec), job.get("best_objective")) or "—")
+    t.add_row("best", best_text(objective_names_of(job), job.get("best_objective")) or "—")
     t.add_row("created", _time(job.get("created_at")))
     t.add_row("started", _time(job.get("started_at")))
     t.add_row("finished", _time(job.get("finished_at"))
@@ -115,7 +115,7 @@ def jobs_table(page: dict[str, Any]) -> Table:
         t.add_column(col)
     for j in page["items"]:
         kind = j.get("kind") or ""
-        best = best_text(objective_names_for(kind) if kind else None, j.get("best_objective"))
+        best = best_text(objective_names_of(j), j.get("best_objective"))
         t.add_row(short(j["id"]), j.get("name") or kind, status_text(j), progress_text(j),
                   best or "—", _time(j.get("created_at")))  # fmt: skip
     return t

@@ -113,6 +113,9 @@ class JobRecord:
     #: ``violations`` (False), or None (not succeeded, or finished before it was checked).
     feasible: bool | None = None
     violations: Any = None
+    #: What submission learned (``kind``, ``robot``, ``optimizer``, ``objectives``, ``n_var``);
+    #: None for a job stored before it was kept.
+    facts: Any = None
 
     @property
     def is_terminal(self) -> bool:

@@ -284,6 +284,7 @@ def create_job(
     total_generations: int = 0,
     sweep_id: str | None = None,
     warnings: Iterable[str] = (),
+    facts: Any = None,
     now: datetime | None = None,
 ) -> JobRecord:
     """Store a queued job, due for dispatch (its ``submitted`` event in the same transaction).
@@ -298,6 +299,7 @@ def create_job(
         total_generations=[total_generations],
         sweep_id=sweep_id,
         warnings=warnings,
+        facts=[facts],
         now=now,
     )
     record = get_job(session, job_id)
@@ -314,6 +316,7 @@ def create_jobs(
     total_generations: Sequence[int],
     sweep_id: str | None = None,
     warnings: Iterable[str] = (),
+    facts: Sequence[Any] | None = None,
     now: datetime | None = None,
 ) -> list[str]:
     """Store several queued jobs in one INSERT; their ids in order.
@@ -321,7 +324,8 @@ def create_jobs(
     Give either whole ``specs`` or, for the jobs of sweep ``sweep_id``, their ``overrides`` of
     the sweep's base spec (the spec is then stored once, in the sweep). A spec's robot document
     is stored once by content and referred to (``services.store.robot_documents``);
-    ``spec_bytes`` counts the whole spec, robot included.
+    ``spec_bytes`` counts the whole spec, robot included. ``facts``: per job what its
+    validation learned (``JobRecord.facts``), or None.
     """
 
     if (specs is None) == (overrides is None):
@@ -331,6 +335,8 @@ def create_jobs(
     docs: Sequence[Any] = specs if specs is not None else overrides  # type: ignore[assignment]
     if len(docs) != len(total_generations):
         raise ValueError("one total_generations per job")
+    if facts is not None and len(facts) != len(docs):
+        raise ValueError("one facts per job")
     at = now_utc(now)
     notes = [str(w) for w in warnings]
     rows = []
@@ -354,6 +360,7 @@ def create_jobs(
                 "dispatch_due_at": at,
                 "dispatch_count": 0,
                 "cpu_seconds": 0.0,
+                "facts": facts[i] if facts is not None else None,
             }
         )
     if rows:

@@ -244,6 +244,11 @@ class Job(Base):
     # The status stays ``succeeded`` (the run completed): an infeasible answer is a verdict.
     feasible: Mapped[bool | None] = mapped_column(Boolean, default=None)
     violations: Mapped[Any | None] = mapped_column(JSONValue(), default=None)
+    #: What submission learned of the job, stored once so nothing re-derives it: ``kind``,
+    #: ``robot``, ``optimizer`` (resolved: the study's defaults filled in), ``objectives``
+    #: (names, minimised), ``n_var`` (``services.api.validation.job_facts``). NULL for jobs
+    #: stored before revision 0010.
+    facts: Mapped[Any | None] = mapped_column(JSONValue(), default=None)
     # The point the per-generation hypervolumes are measured against (objective space, the
     # worker sets it once from the first front: ``services.worker.hypervolume``).
     hypervolume_ref: Mapped[Any | None] = mapped_column(JSONValue(), default=None)

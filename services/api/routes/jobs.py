@@ -40,7 +40,7 @@ from services.api.submission import (
     remember,
     replay_headers,
 )
-from services.api.validation import example_specs
+from services.api.validation import example_specs, stored_references
 from services.api.validation_pool import check_job
 from services.store import lifecycle
 from services.store import repository as repo
@@ -92,11 +92,10 @@ def submit_job(
     """
     fingerprint = request_fingerprint(spec)
     try:
-        with ctx.read() as session:
+        with ctx.read() as session:  # short: no transaction stays open while validating
             check_replay(session, key, idempotency_key, fingerprint, "job")
-            checked = check_job(
-                spec, settings=ctx.settings, key_id=key.id, lookup=robot_lookup(session, key.id)
-            )
+            references = stored_references([spec], robot_lookup(session, key.id))
+        checked = check_job(spec, settings=ctx.settings, key_id=key.id, references=references)
         with ctx.write() as session:
             check_replay(session, key, idempotency_key, fingerprint, "job")
             check_quota(
@@ -107,6 +106,7 @@ def submit_job(
                 owner_key_id=key.id,
                 spec=checked.spec,
                 total_generations=checked.total_generations,
+                facts=checked.facts,
             )
             remember(session, key, idempotency_key, fingerprint, "job", job.id)
     except Replay as replay:

@@ -30,7 +30,7 @@ from services.api.submission import (
     replay_headers,
 )
 from services.api.sweeps import SweepError, SweepPoint, expand, swept_paths
-from services.api.validation import CheckedJob, resolve_robot
+from services.api.validation import CheckedJob, resolve_robot, stored_references
 from services.api.validation_pool import check_sweep
 from services.store import repository as repo
 from services.store.errors import ArtifactError
@@ -90,9 +90,13 @@ def create_sweep(
     queue them. An ``Idempotency-Key`` header makes retries safe."""
     fingerprint = request_fingerprint(body.model_dump(mode="json", by_alias=True))
     try:
-        with ctx.read() as session:
+        with ctx.read() as session:  # short: no transaction stays open while validating
             check_replay(session, key, idempotency_key, fingerprint, "sweep")
-            base, points, checked = _expand_and_check(body, key.id, ctx, session)
+            base, points, references = _expand(body, key.id, ctx, session)
+        checked = check_sweep(
+            points, relocate=_relocate, settings=ctx.settings, key_id=key.id,
+            references=references, prefix=_BASE,
+        )  # fmt: skip
         axes = {"grid": body.grid, "list": body.entries, "seeds": body.seeds, "n_jobs": len(points)}
         overrides = [_resolved(p, c) for p, c in zip(points, checked, strict=True)]
         new_bytes = json_size(base) + sum(json_size(o) for o in overrides)
@@ -106,6 +110,7 @@ def create_sweep(
                 overrides=overrides,
                 total_generations=[c.total_generations for c in checked],
                 sweep_id=sweep.id,
+                facts=[c.facts for c in checked],
             )
             remember(session, key, idempotency_key, fingerprint, "sweep", sweep.id)
     except Replay as replay:
@@ -124,22 +129,18 @@ def _resolved(point: SweepPoint, checked: CheckedJob) -> dict[str, Any]:
     return {**point.overrides, "robot": checked.spec.get("robot")}
 
 
-def _expand_and_check(
+def _expand(
     body: SweepCreate, key_id: str, ctx: Any, session: Any
-) -> tuple[dict[str, Any], list[SweepPoint], list[CheckedJob]]:
-    """The sweep's base (robot reference resolved), its points and their checked specs; a 422
-    locating every distinct error at the override that caused it."""
+) -> tuple[dict[str, Any], list[SweepPoint], dict[str, Any]]:
+    """The sweep's base (robot reference resolved), its points and the stored robots they
+    name (``stored_references``); a 422 for a sweep that cannot be expanded."""
     lookup = robot_lookup(session, key_id)
     base = resolve_robot(body.base, lookup, _BASE)
     try:
         points = expand(base, body.grid, body.entries, body.seeds, max_jobs=ctx.max_sweep_jobs)
     except SweepError as exc:
         raise invalid(("body", *exc.loc), exc.message) from None
-    checked = check_sweep(
-        points, relocate=_relocate, settings=ctx.settings, key_id=key_id, lookup=lookup,
-        prefix=_BASE,
-    )  # fmt: skip
-    return base, points, checked
+    return base, points, stored_references([p.spec for p in points], lookup)
 
 
 def _created(

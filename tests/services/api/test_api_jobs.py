@@ -50,6 +50,38 @@ def test_submit_each_study_kind(
     assert job["spec"] == {"problem": {"kind": kind}} and job["kind"] == kind
 
 
+def test_what_submission_learns_is_stored_with_the_job(
+    client: TestClient, alice: dict[str, str], sent: list[str]
+) -> None:
+    """Issue 24 (facts stored once): kind, the study's default robot and optimizer resolved,
+    the objective names and n_var, as legcore.runner.prepare finds them, are stored with the
+    job (and each job of a sweep) and read back without rebuilding the study."""
+    from legcore.runner import prepare
+
+    kind = "quadruped_gait"
+    job = submit(client, alice, {"problem": {"kind": kind}, "budget": {"generations": 2}})
+    prepared = prepare({"problem": {"kind": kind}})
+    expected = {
+        "kind": kind,
+        "robot": prepared.robot.name,
+        "optimizer": studies()[kind].default_optimizer["kind"],
+        "objectives": list(prepared.problem.objective_names),
+        "n_var": prepared.problem.n_var,
+    }
+    assert job["facts"] == expected
+    assert client.get(f"{API}/jobs/{job['id']}", headers=alice).json()["facts"] == expected
+    sweep = client.post(
+        f"{API}/sweeps",
+        json={"base": {"problem": {"kind": kind}, "budget": {"generations": 2}},
+              "grid": {"optimizer.kind": ["ga", "nsga2"]}},
+        headers=alice,
+    )  # fmt: skip
+    assert sweep.status_code == 202, sweep.text
+    jobs = client.get(f"{API}/jobs?sweep_id={sweep.json()['id']}", headers=alice).json()["items"]
+    assert sorted(j["facts"]["optimizer"] for j in jobs) == ["ga", "nsga2"]
+    assert all(j["facts"]["objectives"] == expected["objectives"] for j in jobs)
+
+
 def test_stored_robot_is_substituted(
     client: TestClient, alice: dict[str, str], sent: list[str]
 ) -> None:

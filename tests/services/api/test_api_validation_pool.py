@@ -186,3 +186,50 @@ def test_a_large_body_costs_more_rate_tokens() -> None:
     assert limiter.acquire("k", now=0.0, cost=3) == 0.0  # 7 tokens left
     assert limiter.acquire("k", now=0.0, cost=8) == 1.0  # one token short: 1 s at 1/s
     assert limiter.acquire("k", now=3.0, cost=50) == 0.0  # capped at the burst (all 10)
+
+
+def test_no_transaction_stays_open_while_a_submission_is_validated(
+    client: TestClient, alice: dict[str, str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A validation may take seconds: the routes read what it needs (the stored robots a spec
+    names) in a short transaction, then validate with none open (an open read would pin a
+    PostgreSQL connection and hold back SQLite's checkpoints for that long)."""
+    import contextlib
+
+    from services.api.routes import jobs as jobs_route
+    from services.api.routes import sweeps as sweeps_route
+
+    ctx = client.app.state.context  # type: ignore[attr-defined]
+    open_now = [0]
+    seen: list[int] = []
+
+    def counted(scope: Any) -> Any:
+        @contextlib.contextmanager
+        def wrapper() -> Iterator[Any]:
+            open_now[0] += 1
+            try:
+                with scope() as session:
+                    yield session
+            finally:
+                open_now[0] -= 1
+
+        return wrapper
+
+    monkeypatch.setattr(ctx, "read", counted(ctx.read))
+    monkeypatch.setattr(ctx, "write", counted(ctx.write))
+
+    def watched(check: Any) -> Any:
+        def run(*args: Any, **kwargs: Any) -> Any:
+            seen.append(open_now[0])
+            return check(*args, **kwargs)
+
+        return run
+
+    monkeypatch.setattr(jobs_route, "check_job", watched(jobs_route.check_job))
+    monkeypatch.setattr(sweeps_route, "check_sweep", watched(sweeps_route.check_sweep))
+    r = client.post(f"{API}/jobs", json=JOB, headers=alice)
+    assert r.status_code == 202, r.text
+    sweep = {"base": JOB, "seeds": [1, 2]}
+    r = client.post(f"{API}/sweeps", json=sweep, headers=alice)
+    assert r.status_code == 202, r.text
+    assert seen == [0, 0]

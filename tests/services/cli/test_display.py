@@ -230,15 +230,19 @@ def test_paper_numbers_only_on_the_papers_robot() -> None:
 
 
 def test_status_marks_an_infeasible_job_in_red(monkeypatch: pytest.MonkeyPatch) -> None:
-    from services.cli import views as cli_views
+    from services.cli import display
     from services.cli.views import job_block, jobs_table, status_text
 
-    # (the objective names, without building the study's default problem)
-    monkeypatch.setattr(cli_views, "objective_names_for", lambda _spec: ["energy_per_metre"])
+    def never(_spec: object) -> None:
+        raise AssertionError("the objective names come from the job's stored facts")
 
+    monkeypatch.setattr(display, "objective_names_for", never)
+    facts = {"kind": "quadruped_gait", "robot": "calderon_quadruped", "optimizer": "ga",
+             "objectives": ["energy_per_metre"], "n_var": 3}  # fmt: skip
     job = {"id": "2253abcd-0000", "kind": "quadruped_gait", "status": "succeeded",
            "feasible": False, "violations": GAIT_VIOLATIONS, "generation": 2,
-           "total_generations": 2, "progress": 1.0, "attempts": 1, "spec": {}}  # fmt: skip
+           "total_generations": 2, "progress": 1.0, "attempts": 1, "spec": {},
+           "facts": facts, "best_objective": [1.5]}  # fmt: skip
     assert str(status_text(job)) == "succeeded (infeasible)"
     assert str(status_text(job).style) == "bold red"
     assert str(status_text({**job, "feasible": True}).style) == "green"

@@ -194,7 +194,26 @@ export interface JobDetail {
   created_at: string;
   started_at: string | null;
   finished_at: string | null;
+  /**
+   * What the job is (kind, robot, optimizer, objective names, n_var), as found at submission; null
+   * for jobs stored before it was kept.
+   */
+  facts: JobFacts | null;
   spec: unknown;
+}
+
+/** What the job is, as its validation found it at submission (stored once). */
+export interface JobFacts {
+  /** The study kind. */
+  kind: string;
+  /** The robot's name (the study's default when none given). */
+  robot: string;
+  /** The optimizer kind (the study's default when none). */
+  optimizer: string;
+  /** Objective names, in the order of best_objective and of the front's columns (all minimised). */
+  objectives: string[];
+  /** Number of decision variables. */
+  n_var: number;
 }
 
 /**
@@ -233,6 +252,11 @@ export interface JobOut {
   created_at: string;
   started_at: string | null;
   finished_at: string | null;
+  /**
+   * What the job is (kind, robot, optimizer, objective names, n_var), as found at submission; null
+   * for jobs stored before it was kept.
+   */
+  facts: JobFacts | null;
 }
 
 /** One line of the jobs page. */
