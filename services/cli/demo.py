@@ -36,10 +36,18 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SERVE_PORT = 8000
 
 
+#: How long (s) the demo waits for its service to answer while the service process lives (a
+#: busy machine can take minutes; a dead service is reported at once).
+START_TIMEOUT_S = 600.0
+#: A line every this many seconds while it waits, so a slow start is never silent.
+START_NOTE_EVERY_S = 30.0
+
+
 def _wait_healthy(url: str, server: subprocess.Popen[bytes], log_path: Path) -> None:
     from services.client import Client
 
-    deadline = time.monotonic() + 120
+    started = time.monotonic()
+    next_note = started + START_NOTE_EVERY_S
     while True:
         if server.poll() is not None:
             err_console.print(f"[bold red]error:[/] the service stopped; see {log_path}")
@@ -48,9 +56,15 @@ def _wait_healthy(url: str, server: subprocess.Popen[bytes], log_path: Path) -> 
             Client(url).health()
             return
         except Exception:
-            if time.monotonic() > deadline:
-                err_console.print("[bold red]error:[/] the service did not start in 120 s")
+            now = time.monotonic()
+            if now - started > START_TIMEOUT_S:
+                err_console.print(f"[bold red]error:[/] the service did not start in "
+                                  f"{START_TIMEOUT_S:.0f} s; see {log_path}")  # fmt: skip
                 raise typer.Exit(code=1) from None
+            if now >= next_note:
+                console.print(f"  still starting after {now - started:.0f} s (a busy machine is "
+                              f"slower; its log: {log_path}) …")  # fmt: skip
+                next_note = now + START_NOTE_EVERY_S
             time.sleep(0.5)
 
 
