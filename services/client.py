@@ -190,6 +190,14 @@ class Client:
                     raise
                 time.sleep(2.0)
 
+    def delete_job(self, job_id: str) -> None:
+        """Delete a finished job and everything stored for it (409 while queued or running)."""
+        self._req("DELETE", f"/jobs/{job_id}")
+
+    def delete_robot(self, robot_id: str) -> None:
+        """Delete one of your stored robots (by id)."""
+        self._req("DELETE", f"/robots/{quote(robot_id, safe='')}")
+
     def cancel(self, job_id: str) -> dict[str, Any]:
         return dict(self.post(f"/jobs/{job_id}/cancel"))
 

@@ -148,6 +148,21 @@ def cancel(
             console.print(f"job {short(full)}: {state}")
 
 
+@app.command()
+def delete(
+    ids: Annotated[list[str], typer.Argument(metavar="JOB...", help="job ids or prefixes")],
+    url: UrlOpt = None,
+    key: KeyOpt = None,
+) -> None:
+    """Delete finished jobs and everything stored for them (progress, front, result,
+    recording), which frees storage quota; a queued or running job: cancel it first."""
+    with client(url, key) as c:
+        for given in ids:
+            _, full = resolve_id(c, given, field="JOB")
+            api_call(c.delete_job, full)
+            console.print(f"job {short(full)}: deleted")
+
+
 def sweep_cancelled_text(sweep_id: str, answer: dict[str, Any]) -> str:
     """What ``POST /sweeps/{id}/cancel`` did, in a line."""
     done = [f"{answer.get('cancelled', 0)} cancelled"]

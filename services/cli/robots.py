@@ -175,6 +175,21 @@ def _find(c: Any, reference: str) -> dict[str, Any]:
             raise ApiError(404, f"no robot {reference!r} among yours or the catalog")
 
 
+@robots_app.command("remove")
+def remove(
+    reference: Annotated[str, typer.Argument(metavar="NAME", help="your robot's name or id")],
+    url: UrlOpt = None,
+    key: KeyOpt = None,
+) -> None:
+    """Delete one of your stored robots (jobs that ran it keep their copy)."""
+    with client(url, key) as c:
+        robot = api_call(_find, c, reference)
+        if robot.get("builtin"):
+            raise bad_input(f"NAME: {reference!r} is a catalog robot: only your own can be removed")
+        api_call(c.delete_robot, robot["id"])
+    console.print(f"robot {robot.get('name') or reference}: removed")
+
+
 @robots_app.command("add")
 def add(
     file: Annotated[Path, typer.Argument(metavar="FILE.urdf", help="the robot's URDF file")],

@@ -204,6 +204,22 @@ def get_robot(robot_id: str, key: CurrentKey, ctx: Context) -> RobotDetailOut:
     return out.model_copy(update={"studies": robot_fits(robot)})
 
 
+@router.delete(
+    "/robots/{robot_id}",
+    status_code=204,
+    summary="Delete one of your stored robots",
+    responses=_404,
+)
+def delete_robot(robot_id: str, key: CurrentKey, ctx: Context) -> Response:
+    """Removes your stored robot ``robot_id`` (catalog robots cannot be deleted). Jobs that ran
+    it are unaffected: a job keeps the robot document it ran, by content."""
+    with ctx.write() as session:
+        deleted = repo.delete_robot(session, robot_id, owner_key_id=key.id)
+    if not deleted:
+        raise not_found("robot", robot_id)
+    return Response(status_code=204)
+
+
 @router.get(
     "/catalog",
     response_model=list[CatalogEntry],

@@ -168,3 +168,20 @@ def test_robots_of_another_key_are_404(
     assert r.status_code == 404 and r.json()["detail"]
     assert client.get(f"{API}/robots", headers=bob).json()["total"] == 0
     assert client.get(f"{API}/robots/{rid}", headers=alice).status_code == 200
+
+
+def test_delete_a_stored_robot(
+    client: TestClient, alice: dict[str, str], bob: dict[str, str]
+) -> None:
+    """A stored robot can be deleted by its owner only (another key's, a catalog name or a
+    second delete: 404); the name is free again."""
+    r = client.post(f"{API}/robots", json={"name": "mine", "catalog": "puma560"}, headers=alice)
+    assert r.status_code == 201, r.text
+    rid = r.json()["id"]
+    assert client.delete(f"{API}/robots/{rid}", headers=bob).status_code == 404
+    assert client.delete(f"{API}/robots/puma560", headers=alice).status_code == 404
+    assert client.delete(f"{API}/robots/{rid}", headers=alice).status_code == 204
+    assert client.get(f"{API}/robots/{rid}", headers=alice).status_code == 404
+    assert client.delete(f"{API}/robots/{rid}", headers=alice).status_code == 404
+    again = client.post(f"{API}/robots", json={"name": "mine", "catalog": "puma560"}, headers=alice)
+    assert again.status_code == 201, again.text

@@ -145,3 +145,13 @@ def test_robots_add_list_show(api: Stack, tmp_path: Path) -> None:
 
     code, out = cli(api, "add", str(tmp_path / "none.urdf"))
     assert code == 2 and "FILE: cannot read" in out
+
+    # remove: by name, once; a catalog robot is not yours to remove
+    code, out = cli(api, "remove", "leg3")
+    assert code == 0 and "robot leg3: removed" in out, out
+    code, out = cli(api, "show", "leg3")
+    assert code == 2 and "no robot 'leg3'" in out
+    code, out = cli(api, "remove", "leg3")
+    assert code == 2 and "no robot 'leg3'" in out
+    code, out = cli(api, "remove", "calderon_leg")
+    assert code == 2 and "catalog robot" in out

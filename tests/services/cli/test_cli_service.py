@@ -97,6 +97,11 @@ def test_cancel_a_job_and_a_sweep_by_prefix(stack: Stack, tmp_path: Path) -> Non
     stack.wait_for(job_id, lambda j: j["status"] == "cancelled", timeout_s=60)
     code, out = cli(stack, "cancel", job_id[:8])
     assert code == 0 and "already finished (cancelled), nothing to cancel" in out, out
+    # a finished job can be deleted, by prefix, once
+    code, out = cli(stack, "delete", job_id[:8])
+    assert code == 0 and f"job {job_id[:8]}: deleted" in out, out
+    code, out = cli(stack, "status", job_id)
+    assert code == 2, out
 
     base = yaml.safe_load((ROOT / "examples" / "003_quadruped_gait.yaml").read_text())
     base["budget"] = {"generations": 4000}
