@@ -18,7 +18,7 @@ from sqlalchemy.pool import NullPool
 
 from services.store.session import make_engine, normalize_url
 from services.store.settings import get_settings
-from services.store.tables import Base
+from services.store.tables import Base, is_search_index
 from services.store.types import JSONValue, UTCDateTime
 
 config = context.config
@@ -48,11 +48,18 @@ def render_item(type_: str, obj: Any, autogen_context: Any) -> str | Literal[Fal
     return False
 
 
+def include_name(name: str | None, type_: str, parent_names: Any) -> bool:
+    """Leave the word search's index (revision 0009: an FTS5 table and its triggers on SQLite,
+    a pg_trgm index on PostgreSQL) out of autogenerate: it lives outside the models."""
+    return not is_search_index(name)
+
+
 def _configure(**kwargs: Any) -> None:
     context.configure(
         target_metadata=target_metadata,
         compare_type=True,
         render_item=render_item,
+        include_name=include_name,
         **kwargs,
     )
 
