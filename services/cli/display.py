@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from typing import Any
@@ -300,11 +301,6 @@ def summary_block(
         size = "?" if view.front_size is None else str(view.front_size)
         head += f"; Pareto front of {size} points, optimum = its knee point"
     lines.append(Text(head))
-    t = Table(box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, padding=(0, 1))
-    t.add_column("  quantity", no_wrap=True)
-    t.add_column("start → optimum" if start else "optimum", justify="right", no_wrap=True)
-    t.add_column("change", justify="right", no_wrap=True)
-    t.add_column(f"paper ({paper.source})" if paper else "paper", no_wrap=True)
     prows = {r.metric: r for r in paper.rows} if paper else {}
     notes: list[str] = []
     rows: list[tuple[str, MetricName, Any]] = list(view.shown_objectives())
@@ -315,6 +311,7 @@ def summary_block(
         v = view.value(k)
         if v is not None:
             rows.append((k, metric_name(k, view.kind), v))
+    cells: list[tuple[str, str, str, str]] = []
     for i, (key, m, v) in enumerate(rows):
         name = label(m)
         if i < len(view.objective_names):
@@ -335,15 +332,15 @@ def summary_block(
             if pr.note:
                 notes.append(f"{m.label}: {pr.note}")
             change = _change(pr.start, pr.optimum, m)
-            if change:
-                paper_txt += f"  ({change})"
+            if change:  # one word: kept on one line where the column wraps
+                paper_txt += "  (" + change.replace(" ", "") + ")"
         if m.note:
             notes.append(f"{m.label}: {m.note}")
         change = _change(s, v, m)
         if no_change and change:
             change = "—"
-        t.add_row("  " + name, ours, change, paper_txt)
-    lines.append(t)
+        cells.append(("  " + name, ours, change, paper_txt))
+    lines.append(_summary_table(cells, start is not None, paper.source if paper else None))
     if no_change:
         lines.append(Text(f"  change: — because {no_change}", style="yellow"))
     earned = earned_line(view)
@@ -353,6 +350,25 @@ def summary_block(
         notes.insert(0, paper.note)
     lines.extend(Text(f"  note — {n}", style="dim") for n in notes)
     return Group(*lines)
+
+
+def _summary_table(
+    cells: Sequence[tuple[str, str, str, str]], has_start: bool, source: str | None
+) -> Table:
+    """The summary's rows: quantity, ours (start → optimum), change, the paper's numbers. Our
+    numbers and the change are never cut: on a narrow terminal the quantity's name and the
+    paper's column wrap instead (80 columns keep every number)."""
+    t = Table(box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, padding=(0, 1))
+    ours_head = "start → optimum" if has_start else "optimum"
+    t.add_column("  quantity", overflow="fold", ratio=3)
+    t.add_column(ours_head, justify="right", no_wrap=True,
+                 min_width=max([len(ours_head), *(len(c[1]) for c in cells)]))  # fmt: skip
+    t.add_column("change", justify="right", no_wrap=True,
+                 min_width=max([len("change"), *(len(c[2]) for c in cells)]))  # fmt: skip
+    t.add_column(f"paper ({source})" if source else "paper", overflow="fold", ratio=2)
+    for row in cells:
+        t.add_row(*row)
+    return t
 
 
 def earned_line(view: ResultView) -> str:

@@ -89,6 +89,24 @@ def test_summary_block_one_row_per_quantity_with_the_paper_beside() -> None:
     assert text.count("score F") == 1 and "the GA's criterion" not in text
 
 
+@pytest.mark.parametrize("width", [80, 100, 120])
+def test_summary_block_keeps_our_numbers_on_a_normal_terminal(width: int) -> None:
+    """Issue 21: at 80-120 columns the block keeps start → optimum and the change of every
+    row whole (the names and the paper's column wrap instead), and cuts nothing."""
+    view = _swing_view()
+    spec = yaml.safe_load((ROOT / "examples" / "000_swing_energy_flat.yaml").read_text())
+    console = Console(width=width, record=True, color_system=None)
+    console.print(summary_block(view, title="000 flat", spec=spec))
+    text = console.export_text()
+    for ours, change in (("1.514 → 9.681", "+539 %"), ("0.243 → 0.001169", "-99.5 %"),
+                         ("2.399 → 0.6508", "-72.9 %"), ("0.2087 → 0.1546", "-25.9 %")):
+        row = next(ln for ln in text.splitlines() if ours in ln)
+        assert change in row, (width, row)
+    assert "0.078 → 0.0003" in text and "(-99.6%)" in text
+    assert "…" not in text
+    assert max(len(ln) for ln in text.splitlines()) <= width
+
+
 def test_full_tables_hide_repeats_and_show_every_baseline() -> None:
     view = _swing_view()
     text = _text(*full_tables(view, title="t"))
