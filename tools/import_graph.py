@@ -225,7 +225,7 @@ def render(root: Path = ROOT) -> str:
     edges = {(_group(i.importer), _group(i.imported)) for i in found}
     edges = {(a, b) for a, b in edges if a != b}
     nodes = sorted({_group(m) for m in module_files(root)}, key=lambda n: (-layer_of(n), n))
-    out = [BEGIN, "", "```mermaid", "flowchart TB"]
+    out = [BEGIN, "", "```mermaid sketch", "flowchart TB"]
     for index in range(len(LAYERS) - 1, -1, -1):
         name = LAYERS[index][0]
         members = [n for n in nodes if layer_of(n) == index]
