@@ -31,7 +31,7 @@ from services.cli.common import (
 )
 from services.cli.jobs import follow, print_job_result, short
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 #: The port `legopt serve` listens on by default (what the "next" lines refer to).
 SERVE_PORT = 8000
 

@@ -295,3 +295,10 @@ def test_the_gap_to_the_physical_minimum_is_a_line_of_the_block() -> None:
                                                 "objectives": {"names": ["time"],
                                                                "values": {"time": 3.3914}}})
     assert api.gap == gap
+
+
+def test_the_demo_finds_the_example_specs() -> None:
+    """The demo's examples folder is the repository's (a module move once broke this)."""
+    from services.cli import demo
+
+    assert (demo.EXAMPLES / "000_swing_energy_flat.yaml").is_file()
