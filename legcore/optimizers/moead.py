@@ -209,8 +209,13 @@ class MOEAD(Algorithm):
             self._replace(X, F, cv)
         self._update_archive(X, F, cv)
 
+    #: The replacement and archive update (compiled, :mod:`~legcore.optimizers.moead_kernels`;
+    #: the numpy versions of :mod:`~legcore.optimizers.moead_reference` give the same results).
+    replace_step = staticmethod(replace)
+    archive_step = staticmethod(update_archive)
+
     def _replace(self, Y: np.ndarray, FY: np.ndarray, cvY: np.ndarray) -> None:
-        j, i = replace(self.neighbors, self.weights, self._z, self._F, self._cv, FY, cvY)
+        j, i = self.replace_step(self.neighbors, self.weights, self._z, self._F, self._cv, FY, cvY)
         self._X[j] = Y[i]
         self._F[j] = FY[i]
         self._cv[j] = cvY[i]
@@ -219,8 +224,8 @@ class MOEAD(Algorithm):
         cap = self._params["archive_size"]
         if cap == 0:
             return
-        merged = update_archive(X, F, cv, self._AX, self._AF,
-                                self.pop_size if cap is None else cap)
+        merged = self.archive_step(X, F, cv, self._AX, self._AF,
+                                   self.pop_size if cap is None else cap)
         if merged is not None:
             self._AX, self._AF = merged
 

@@ -221,16 +221,13 @@ def body_pose_ik_reference(
     """:func:`body_pose_ik` in numpy, through ``Tripod.to_leg_frames`` and ``Tripod.ik``: the
     path of numerical-IK legs, and the reference the compiled closed-form path is tested
     against (same arguments and results)."""
-    P = np.asarray(feet_world, dtype=float)
-    if P.shape != (3, 3):
-        raise ValueError(f"feet_world: expected shape (3, 3), got {P.shape}")
+    P = _feet(feet_world)
+    _check_knee(knee)
     x, y, yaw = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (x, y, yaw)))
     c, s = np.cos(yaw)[..., None], np.sin(yaw)[..., None]
     dx, dy = P[:, 0] - x[..., None], P[:, 1] - y[..., None]
     p_body = np.stack((c * dx + s * dy, -s * dx + c * dy, np.broadcast_to(P[:, 2], dx.shape)), -1)
     p_leg = tripod.to_leg_frames(p_body)
-    if knee not in ("up", "down", "either"):
-        raise ValueError(f"knee: expected 'up', 'down' or 'either', got {knee!r}")
     branch = KNEE_DOWN if knee == "down" else KNEE_UP
     if q_ref is None:
         ref = np.stack([rb.home for rb in tripod.robots] if tripod.robots else [np.zeros(3)] * 3)

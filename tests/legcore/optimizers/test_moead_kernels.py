@@ -104,21 +104,8 @@ def test_archive_update_equals_the_numpy_reference(seed: int, kind: str, n_obj: 
 class _ReferenceMOEAD(MOEAD):
     """Today's MOEA/D with the numpy replacement and archive update."""
 
-    def _replace(self, Y: np.ndarray, FY: np.ndarray, cvY: np.ndarray) -> None:
-        j, i = replace_reference(self.neighbors, self.weights, self._z, self._F, self._cv,
-                                 FY, cvY)
-        self._X[j] = Y[i]
-        self._F[j] = FY[i]
-        self._cv[j] = cvY[i]
-
-    def _update_archive(self, X: np.ndarray, F: np.ndarray, cv: np.ndarray) -> None:
-        cap = self._params["archive_size"]
-        if cap == 0:
-            return
-        merged = archive_reference(X, F, cv, self._AX, self._AF,
-                                   self.pop_size if cap is None else cap)
-        if merged is not None:
-            self._AX, self._AF = merged
+    replace_step = staticmethod(replace_reference)
+    archive_step = staticmethod(archive_reference)
 
 
 class _Constrained(Problem):
