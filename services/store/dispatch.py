@@ -26,7 +26,7 @@ from sqlalchemy.orm import Session
 
 from services.store.events import add_events
 from services.store.sql import insert_ignoring_duplicates, now_utc, rowcount
-from services.store.tables import JOBS, SERVICE_LEASES, JobEventKind, JobStatus
+from services.store.tables import JOB_EVENTS, JOBS, SERVICE_LEASES, JobEventKind, JobStatus
 from services.store.types import UTCDateTime
 
 #: Seconds from a send to the next re-send of a still-queued job, by messages sent so far;
@@ -66,6 +66,7 @@ def claim_sends(
     stale_before: datetime | None = None,
     stale_limit: int = 0,
     limit: int = 1000,
+    actor: str | None = None,
     now: datetime | None = None,
 ) -> list[str]:
     """Claim the sending of due messages; the ids whose message the caller must send now.
@@ -75,6 +76,10 @@ def claim_sends(
     (the broker holds fewer messages than queued jobs: theirs were lost), oldest send first.
     Each claimed job's ``dispatch_due_at`` moves to ``now + backoff_s[dispatch_count]`` and its
     count grows by one, in one conditional UPDATE, so a concurrent sender cannot claim it too.
+    The claimed jobs' ``dispatched`` events (by ``actor``, at ``now``) are recorded in the same
+    transaction, before anything is published: a sender killed right after its publish still
+    leaves the event; one killed before it leaves an event without a message (the job stays
+    due and is sent again), and a failed publish withdraws it (``release_sends``).
     """
     now = now_utc(now)
     ids: list[str] = []
@@ -111,24 +116,33 @@ def claim_sends(
         .returning(JOBS.c.id)
     )
     claimed = set(session.execute(stmt).scalars())
-    return [i for i in ids if i in claimed]
-
-
-def record_sent(
-    session: Session, job_ids: Sequence[str], *, actor: str, now: datetime | None = None
-) -> None:
-    """Record a ``dispatched`` event for each job whose message was sent; ``now``: the time
-    its send was claimed (``claim_sends``' ``now``, the job's ``last_dispatch_at``), so the
-    events show the protocol's own clock even when the publish itself was slow."""
-    add_events(session, JobEventKind.DISPATCHED, job_ids, actor=actor, now=now)
+    out = [i for i in ids if i in claimed]
+    if out:
+        add_events(session, JobEventKind.DISPATCHED, out, actor=actor, now=now)
+    return out
 
 
 def release_sends(
-    session: Session, job_ids: Sequence[str], *, retry_at: datetime
+    session: Session,
+    job_ids: Sequence[str],
+    *,
+    retry_at: datetime,
+    actor: str | None = None,
+    claimed_at: datetime | None = None,
 ) -> None:
-    """Give back claimed sends that failed (broker down): due again at ``retry_at``."""
+    """Give back claimed sends that failed (broker down): due again at ``retry_at``; their
+    ``dispatched`` events (``actor``'s, at ``claimed_at``) are withdrawn."""
     if not job_ids:
         return
+    if claimed_at is not None:
+        session.execute(
+            delete(JOB_EVENTS).where(
+                JOB_EVENTS.c.job_id.in_(list(job_ids)),
+                JOB_EVENTS.c.kind == JobEventKind.DISPATCHED,
+                JOB_EVENTS.c.at == now_utc(claimed_at),
+                JOB_EVENTS.c.actor == actor,
+            )
+        )
     session.execute(
         update(JOBS)
         .where(JOBS.c.id.in_(list(job_ids)), JOBS.c.status == JobStatus.QUEUED)
@@ -201,7 +215,6 @@ __all__ = [
     "claim_sends",
     "lead_holder",
     "queued_sent_count",
-    "record_sent",
     "release_lead",
     "release_sends",
     "try_lead",

@@ -35,7 +35,6 @@ from services.store.dispatch import (
     backoff_schedule,
     claim_sends,
     queued_sent_count,
-    record_sent,
     release_lead,
     release_sends,
     try_lead,
@@ -81,8 +80,8 @@ def _send_claimed(
     bind: Bind = None,
     now: datetime | None = None,
 ) -> list[str]:
-    """Send the claimed ``ids``; record the sends; give failed ones back. Returns the unsent."""
-    sent: list[str] = []
+    """Send the claimed ``ids`` (their ``dispatched`` events were recorded with the claim);
+    give failed ones back and withdraw their events. Returns the unsent."""
     unsent: list[str] = []
     for i, job_id in enumerate(ids):
         try:
@@ -91,14 +90,11 @@ def _send_claimed(
             log.warning("sending job %s failed: %s: %s", job_id, type(exc).__name__, exc)
             unsent = list(ids[i:])  # the broker is down: stop, keep the rest due
             break
-        sent.append(job_id)
-    claimed_at = now or datetime.now(UTC)
-    retry_at = claimed_at + timedelta(seconds=settings.dispatch_period_s)
-    with session_scope(bind, immediate=True) as s:
-        if sent:  # the event's time is the claim's (the protocol's clock: last_dispatch_at)
-            record_sent(s, sent, actor=actor, now=claimed_at)
-        if unsent:
-            release_sends(s, unsent, retry_at=retry_at)
+    if unsent:
+        claimed_at = now or datetime.now(UTC)
+        retry_at = claimed_at + timedelta(seconds=settings.dispatch_period_s)
+        with session_scope(bind, immediate=True) as s:
+            release_sends(s, unsent, retry_at=retry_at, actor=actor, claimed_at=claimed_at)
     return unsent
 
 
@@ -117,7 +113,7 @@ def send_now(
     backoff = backoff_schedule(settings.lease_seconds)
     now = datetime.now(UTC)
     with session_scope(bind, immediate=True) as s:
-        ids = claim_sends(s, job_ids=list(job_ids), backoff_s=backoff, now=now)
+        ids = claim_sends(s, job_ids=list(job_ids), backoff_s=backoff, actor=actor, now=now)
     return _send_claimed(ids, send, actor, settings, bind, now)
 
 
@@ -159,6 +155,7 @@ def dispatch_pass(
             backoff_s=backoff_schedule(settings.lease_seconds),
             stale_before=stale_before,
             stale_limit=stale_limit,
+            actor=actor,
             now=now,
         )
     if ids:

@@ -182,9 +182,35 @@ def test_send_now_failure_leaves_the_job_due(engine: Engine) -> None:
         ids, broker.send, actor="api", settings=_settings(), bind=make_session_factory(engine)
     )
     assert sorted(unsent) == sorted(ids)
+    with session_scope(engine) as s:  # a failed publish withdraws its event
+        assert not any(count_events(s, JobEventKind.DISPATCHED, ids).values())
     broker.down = False
     _pass(engine, broker, datetime.now(UTC) + timedelta(seconds=2))
     assert sorted(broker.sent) == sorted(ids)
+    with session_scope(engine) as s:
+        assert count_events(s, JobEventKind.DISPATCHED, ids) == dict.fromkeys(ids, 1)
+
+
+class _Killed(BaseException):
+    """The sending process dies right after its publish (kill -9 of the API)."""
+
+
+def test_sender_killed_after_its_publish_leaves_the_dispatched_event(engine: Engine) -> None:
+    """CI found a job claimed without any 'dispatched' event: the API was killed between its
+    publish and recording the event. The event is recorded with the claim, before the send."""
+    (job_id,) = _jobs(engine, 1)
+    broker = FakeBroker()
+
+    def send_then_die(jid: str) -> None:
+        broker.send(jid)
+        raise _Killed
+
+    with pytest.raises(_Killed):
+        send_now([job_id], send_then_die, actor="api", settings=_settings(),
+                 bind=make_session_factory(engine))  # fmt: skip
+    assert broker.sent == [job_id]
+    with session_scope(engine) as s:
+        assert count_events(s, JobEventKind.DISPATCHED, [job_id]) == {job_id: 1}
 
 
 def test_dispatcher_role_moves_when_its_holder_stops(engine: Engine) -> None:
