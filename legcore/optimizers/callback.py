@@ -13,7 +13,22 @@ from typing import Any, Protocol
 
 import numpy as np
 
-__all__ = ["Progress", "GenerationRecord", "Callback"]
+__all__ = ["Batch", "Progress", "GenerationRecord", "Callback"]
+
+
+@dataclass(frozen=True)
+class Batch:
+    """The solutions one generation evaluated (what a trial table shows).
+
+    Attributes:
+        X: ``(B, n_var)`` decision vectors.
+        F: ``(B, n_obj)`` their objectives (minimised form).
+        cv: ``(B,)`` their total constraint violation (0 = feasible).
+    """
+
+    X: np.ndarray
+    F: np.ndarray
+    cv: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -32,6 +47,8 @@ class Progress:
         front_X: ``(k, n_var)`` the current non-dominated feasible set (the single best for one
             objective; empty while nothing feasible has been found).
         front_F: ``(k, n_obj)`` its objectives.
+        batch: the solutions this generation evaluated (``None`` for a progress rebuilt
+            without a step, e.g. right after a resume).
     """
 
     generation: int
@@ -42,6 +59,7 @@ class Progress:
     best_cv: float
     front_X: np.ndarray
     front_F: np.ndarray
+    batch: Batch | None = None
 
 
 @dataclass(frozen=True)

@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 
 from legcore.optimizers.base import Algorithm, from_jsonable
-from legcore.optimizers.callback import Callback, GenerationRecord, Progress
+from legcore.optimizers.callback import Batch, Callback, GenerationRecord, Progress
 from legcore.optimizers.termination import Termination
-from legcore.problems.base import Problem
+from legcore.problems.base import Problem, constraint_violation
 
 __all__ = ["Result", "Run", "minimize"]
 
@@ -166,7 +166,9 @@ class Run:
         X = algo.ask()
         F, G = self.problem.evaluate(X)
         algo.tell(X, F, G)
-        progress = self._make_progress(self._elapsed + (time.perf_counter() - t0))
+        progress = self._make_progress(
+            self._elapsed + (time.perf_counter() - t0), Batch(X, F, constraint_violation(G))
+        )
         if self._initial is None and not self._history:
             self._initial = (progress.best_x.copy(), progress.best_f.copy(), progress.best_cv)
         self._elapsed = progress.elapsed
@@ -242,7 +244,7 @@ class Run:
             float(init["cv"]),
         )
 
-    def _make_progress(self, elapsed: float) -> Progress:
+    def _make_progress(self, elapsed: float, batch: Batch | None = None) -> Progress:
         algo = self.algorithm
         x, f, cv = algo.best()
         front_X, front_F = algo.front()
@@ -255,6 +257,7 @@ class Run:
             best_cv=cv,
             front_X=front_X,
             front_F=front_F,
+            batch=batch,
         )
 
 

@@ -276,6 +276,24 @@ class Generation(Base):
     front_packed: Mapped[bytes | None] = mapped_column(LargeBinary, default=None)
 
 
+class Evaluation(Base):
+    """The solutions one generation of a job evaluated (the trial table's rows), as packed
+    float64 matrices (``services.store.front_codec``): ``x`` (n, n_var), ``f`` (n, n_obj,
+    minimised form) and ``cv`` (n, 1). Kept for at most ``evaluations.MAX_STORED_EVALUATIONS``
+    solutions per job (``services.store.evaluations``)."""
+
+    __tablename__ = "evaluations"
+    __table_args__ = (UniqueConstraint("job_id", "generation"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    job_id: Mapped[str] = mapped_column(String(ID_LENGTH), _job_fk())
+    generation: Mapped[int] = mapped_column(Integer)
+    n: Mapped[int] = mapped_column(Integer)
+    x_packed: Mapped[bytes] = mapped_column(LargeBinary)
+    f_packed: Mapped[bytes] = mapped_column(LargeBinary)
+    cv_packed: Mapped[bytes] = mapped_column(LargeBinary)
+
+
 class Checkpoint(Base):
     """Latest optimiser state of a job (one row per job, replaced on save)."""
 
@@ -449,6 +467,7 @@ ROBOTS = cast(Table, Robot.__table__)
 SWEEPS = cast(Table, Sweep.__table__)
 JOBS = cast(Table, Job.__table__)
 GENERATIONS = cast(Table, Generation.__table__)
+EVALUATIONS = cast(Table, Evaluation.__table__)
 CHECKPOINTS = cast(Table, Checkpoint.__table__)
 RESULTS = cast(Table, Result.__table__)
 PARETO_POINTS = cast(Table, ParetoPoint.__table__)

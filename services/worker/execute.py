@@ -34,9 +34,16 @@ from pydantic import ValidationError
 
 from legcore.jobspec import spec_error_locations
 from legcore.optimizers import from_jsonable, to_jsonable
-from legcore.runner import RunResult, finalize, prepare
+from legcore.runner import RunResult, finalize, job_size, prepare
 from services.store.artifacts import ArtifactStore
 from services.store.errors import LeaseLostError
+from services.store.evaluations import (
+    MAX_STORED_EVALUATIONS,
+    EvaluationsIn,
+    evaluation_stride,
+    keeps_generation,
+    record_evaluations,
+)
 from services.store.lifecycle import (
     claim_job,
     fail_job,
@@ -197,6 +204,7 @@ def _run_claimed(
         log.info("job %s resumes from its checkpoint at generation %d", job_id, resumed_from)
 
     pending: list[GenerationIn] = []  # generation rows not yet written
+    trials = _TrialKeeper(prepared)  # the evaluated solutions kept for the trial table
     fronts: dict[int, Any] = {}  # this attempt's thinned fronts, for the recording
     last_flush = last_checkpoint = time.monotonic()
     min_checkpoint_s = 0.0 if settings.checkpoint_every == 1 else CHECKPOINT_MIN_S
@@ -222,6 +230,7 @@ def _run_claimed(
                 front=front,
             )
         )
+        trials.add(progress, last=run.done)
         now = time.monotonic()
         checkpoint_due = run.done or (
             progress.generation % settings.checkpoint_every == 0
@@ -238,6 +247,7 @@ def _run_claimed(
             with session_scope(immediate=True) as s:
                 if record_generations(s, job_id, wid, pending):
                     beat.cancel.set()
+                record_evaluations(s, job_id, trials.take())
                 if (ref := hv.take_unsaved_ref()) is not None:
                     set_hypervolume_ref(s, job_id, wid, ref)
                 add_cpu_seconds(s, job_id, cpu.take())
@@ -264,6 +274,32 @@ def _run_claimed(
     recording_fronts = _recording_fronts(job_id, resumed_from, fronts)
     _store_result(job_id, wid, attempt, settings, result, notes, cpu, recording_fronts)
     return Outcome(job_id, "succeeded", resumed_from)
+
+
+class _TrialKeeper:
+    """The generations' evaluated solutions to store (``services.store.evaluations``): every
+    ``stride``-th generation and the last, at most ``MAX_STORED_EVALUATIONS`` solutions plus
+    the last generation's."""
+
+    def __init__(self, prepared: Any) -> None:
+        size = job_size(prepared)
+        self.stride = evaluation_stride(size.population, size.generations)
+        self.kept = 0
+        self.pending: list[EvaluationsIn] = []
+
+    def add(self, progress: Any, *, last: bool) -> None:
+        batch = progress.batch
+        if batch is None or not keeps_generation(progress.generation, self.stride, last):
+            return
+        n = int(batch.X.shape[0])
+        if not last and self.kept + n > MAX_STORED_EVALUATIONS:
+            return
+        self.kept += n
+        self.pending.append(EvaluationsIn(progress.generation, batch.X, batch.F, batch.cv))
+
+    def take(self) -> list[EvaluationsIn]:
+        out, self.pending = self.pending, []
+        return out
 
 
 MAX_FRONT_POINTS = 300

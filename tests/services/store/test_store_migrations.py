@@ -47,7 +47,7 @@ def _round_trip(url: str) -> None:
     assert _diff(url), "an empty database must differ from the models"
 
     migrate.upgrade(url)
-    assert migrate.current_revision(url) == migrate.head_revision() == "0010"
+    assert migrate.current_revision(url) == migrate.head_revision() == "0011"
     assert migrate.is_up_to_date(url)
     assert TABLES <= _tables(url)
     assert _diff(url) == []
@@ -84,7 +84,7 @@ def test_alembic_ini_takes_the_url_from_x_argument(tmp_path: Path) -> None:
     cfg = Config(str(ini), cmd_opts=argparse.Namespace(x=[f"url={url}"]))
     cfg.attributes["configure_logger"] = False
     command.upgrade(cfg, "head")
-    assert migrate.current_revision(url) == "0010"
+    assert migrate.current_revision(url) == "0011"
     command.downgrade(cfg, "base")
     assert migrate.current_revision(url) is None
 
