@@ -175,8 +175,20 @@ class Client:
     def generations(self, job_id: str, limit: int = 1000) -> dict[str, Any]:
         return dict(self.get(f"/jobs/{job_id}/generations", limit=limit))
 
+    def _download(self, path: str) -> bytes:
+        """The body of a download, following a 307 to a presigned URL of the artifact store
+        (``LEGOPT_ARTIFACTS_PRESIGN``) without the API key."""
+        resp = self._req("GET", path)
+        if resp.status_code != 307 or "location" not in resp.headers:
+            return resp.content
+        with httpx.Client(timeout=self.http.timeout) as plain:
+            direct = plain.get(resp.headers["location"])
+        if direct.status_code >= 400:
+            raise ApiError(direct.status_code, f"artifact store: {direct.text[:200]}")
+        return direct.content
+
     def recording(self, job_id: str) -> bytes:
-        return self._req("GET", f"/jobs/{job_id}/recording").content
+        return self._download(f"/jobs/{job_id}/recording")
 
     def point_recording(self, job_id: str, k: int, *, wait_s: float = 120.0) -> bytes:
         """The recording of point ``k`` of a job's Pareto front (made on demand by the API;
@@ -184,7 +196,7 @@ class Client:
         deadline = time.monotonic() + wait_s
         while True:
             try:
-                return self._req("GET", f"/jobs/{job_id}/pareto/{k}/recording").content
+                return self._download(f"/jobs/{job_id}/pareto/{k}/recording")
             except ApiError as exc:
                 if exc.status != 503 or time.monotonic() > deadline:
                     raise

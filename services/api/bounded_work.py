@@ -48,7 +48,9 @@ class BoundedWork:
         self.wait_s, self.retry_after_s = wait_s, retry_after_s
         self._executor: ThreadPoolExecutor | None = None
         self._pending: dict[Hashable, Future[Any]] = {}
-        self._lock = threading.Lock()
+        # re-entrant: a work that is already done when its callback is added (it failed at
+        # once) runs ``_forget`` in this thread, inside ``run``'s locked block
+        self._lock = threading.RLock()
 
     @property
     def pending(self) -> int:

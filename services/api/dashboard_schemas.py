@@ -6,8 +6,9 @@ import math
 from datetime import datetime
 from typing import Any
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, JsonValue
 
+from services.api.schemas.common import BestObjective
 from services.api.verdict_schemas import (
     FEASIBLE_DESCRIPTION,
     VIOLATIONS_DESCRIPTION,
@@ -36,6 +37,32 @@ def quantities(names: list[str] | tuple[str, ...], kind: str | None = None) -> l
     return [Quantity(**d) for d in describe_all(names, kind)]
 
 
+class NamedValue(BaseModel):
+    """A quantity's value in its own sign, with its name and SI unit."""
+
+    name: str = Field(description="Its key (a maximised quantity under its own name).")
+    label: str
+    unit: str = Field(description="SI unit ('' when dimensionless).")
+    value: float | None
+
+
+def named_best(best: BestObjective, facts: object, kind: str | None) -> list[NamedValue]:
+    """The best-so-far objectives named, each in its own sign and unit (``neg_score`` becomes
+    ``score``, positive); [] when the job's objective names are not known."""
+    from legcore.studies.metric_names import display_objective
+
+    names = facts.get("objectives") if isinstance(facts, dict) else None
+    values = best if isinstance(best, list) else [best] if best is not None else []
+    if not isinstance(names, list) or len(names) != len(values):
+        return []
+    out = []
+    for name, value in zip(names, values, strict=True):
+        shown, signed = display_objective(str(name), value)
+        q = quantities([shown], kind)[0]
+        out.append(NamedValue(name=shown, label=q.label, unit=q.unit, value=signed))
+    return out
+
+
 class JobRowOut(BaseModel):
     """One line of the jobs page."""
 
@@ -51,11 +78,14 @@ class JobRowOut(BaseModel):
     generation: int
     total_generations: int
     progress: float
-    best_objective: Any = None
-    feasible: bool | None = Field(default=None, description=FEASIBLE_DESCRIPTION)
-    violations: list[ViolationOut] = Field(
-        default_factory=list, description=VIOLATIONS_DESCRIPTION
+    best_objective: BestObjective = None
+    best_named: list[NamedValue] = Field(
+        default_factory=list,
+        description="`best_objective` named, each value in its own sign and unit (a maximised "
+        "quantity positive, under its own name); empty when the objectives are not known.",
     )
+    feasible: bool | None = Field(default=None, description=FEASIBLE_DESCRIPTION)
+    violations: list[ViolationOut] = Field(default_factory=list, description=VIOLATIONS_DESCRIPTION)
     attempts: int
     cancel_requested: bool
     error: str | None
@@ -80,6 +110,7 @@ class JobRowOut(BaseModel):
             total_generations=job.total_generations,
             progress=job.progress,
             best_objective=job.best_objective,
+            best_named=named_best(job.best_objective, job.facts, row.kind),
             feasible=job.feasible,
             violations=violations_out(job.violations),
             attempts=job.attempt_count,
@@ -144,7 +175,9 @@ class BaselineMark(BaseModel):
 
     name: str
     objectives: list[float | None] = Field(description="In the order of `objectives`.")
-    metrics: dict[str, Any]
+    metrics: dict[str, bool | int | float | str] = Field(
+        description="Its scalar metrics by name (labelled in the front's `metrics`)."
+    )
 
     @classmethod
     def from_record(cls, b: BaselineRecord, names: list[str]) -> BaselineMark:
@@ -232,7 +265,7 @@ class MotionOut(BaseModel):
     """One solution decoded again: which one, its objectives and metrics, its joint signals."""
 
     job_id: str
-    source: str = Field(description="point | baseline | best")
+    source: str = Field(description="point | baseline | trial | best")
     index: int | None = None
     name: str | None = None
     x: list[float] | None
@@ -262,9 +295,12 @@ class SweepCell(BaseModel):
     """One cell of a sweep's grid: the jobs sharing every swept value but the seed."""
 
     index: int
-    values: dict[str, Any] = Field(description="The swept values (seed excluded).")
+    values: dict[str, JsonValue] = Field(
+        description="The swept values (seed excluded): whatever JSON the spec takes at each "
+        "path (a number, a name, a list, a robot's name)."
+    )
     job_ids: list[str]
-    seeds: list[Any]
+    seeds: list[int | None] = Field(description="Each job's seed (null: none set).")
     counts: dict[str, int]
     stats: dict[str, CellStat] = Field(description="Column name -> mean ± sd.")
 
@@ -284,12 +320,20 @@ class SweepCellsOut(BaseModel):
     )
 
 
+class CellFrontJob(BaseModel):
+    """One job of a cell and its final front."""
+
+    job_id: str
+    seed: int | None
+    points: list[list[float | None]] = Field(description="The front's objective vectors.")
+
+
 class CellFront(BaseModel):
     """The final fronts of one cell's jobs (objective vectors)."""
 
     cell: int
     label: str
-    jobs: list[dict[str, Any]]
+    jobs: list[CellFrontJob]
 
 
 class SweepFrontsOut(BaseModel):

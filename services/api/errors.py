@@ -34,6 +34,8 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from services.api.security_headers import SECURITY_HEADERS
 from services.store.errors import (
     ArtifactError,
+    ArtifactMissingError,
+    ArtifactUnavailableError,
     ConflictError,
     NotFoundError,
 )
@@ -220,6 +222,24 @@ async def _artifact(_request: Request, exc: Exception) -> JSONResponse:
     return _detail(status.HTTP_500_INTERNAL_SERVER_ERROR, f"artifact store error: {exc}")
 
 
+#: Seconds a client is asked to wait before retrying when the artifact store is unreachable.
+ARTIFACT_RETRY_AFTER_S = 30
+
+
+async def _artifact_missing(_request: Request, exc: Exception) -> JSONResponse:
+    log.warning("artifact missing: %s", exc)
+    return _detail(status.HTTP_404_NOT_FOUND, str(exc))
+
+
+async def _artifact_unavailable(_request: Request, exc: Exception) -> JSONResponse:
+    log.error("artifact store unavailable: %s", exc)
+    return _detail(
+        status.HTTP_503_SERVICE_UNAVAILABLE,
+        f"{exc}; retry in {ARTIFACT_RETRY_AFTER_S} s",
+        headers={"Retry-After": str(ARTIFACT_RETRY_AFTER_S)},
+    )
+
+
 async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
     log.exception("unhandled error on %s %s", request.method, request.url.path, exc_info=exc)
     return _detail(  # sent from outside every middleware: its own security headers
@@ -231,13 +251,16 @@ async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
 
 def install_error_handlers(app: FastAPI) -> None:
     """422 for request validation errors (JSON-safe, see ``public_errors``) and for an
-    ``HTTPException(422, ...)`` (the same shape); store errors to 404 / 409 / 500 and anything
-    unexpected to a logged 500."""
+    ``HTTPException(422, ...)`` (the same shape); store errors to 404 / 409 / 500 (an artifact
+    whose file or object is gone: 404 naming it; an artifact store that cannot be reached: 503
+    with ``Retry-After``) and anything unexpected to a logged 500."""
     app.add_exception_handler(RequestValidationError, _request_invalid)
     app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(NotFoundError, _not_found)
     app.add_exception_handler(ConflictError, _conflict)
     app.add_exception_handler(ArtifactError, _artifact)
+    app.add_exception_handler(ArtifactMissingError, _artifact_missing)
+    app.add_exception_handler(ArtifactUnavailableError, _artifact_unavailable)
     app.add_exception_handler(Exception, _unexpected)
 
 

@@ -17,11 +17,20 @@ from __future__ import annotations
 import csv
 import io
 import json
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from datetime import datetime
 from typing import Any, Literal
 
-__all__ = ["FORMATS", "MEDIA_TYPES", "ExportFormat", "csv_cell", "encode", "filename"]
+__all__ = [
+    "FORMATS",
+    "MEDIA_TYPES",
+    "ExportFormat",
+    "Units",
+    "csv_cell",
+    "encode",
+    "filename",
+    "header",
+]
 
 ExportFormat = Literal["csv", "json", "parquet"]
 FORMATS: tuple[str, ...] = ("csv", "json", "parquet")
@@ -30,6 +39,9 @@ MEDIA_TYPES = {
     "json": "application/json",
     "parquet": "application/vnd.apache.parquet",
 }
+#: Per column key, ``(unit, label)`` (unit "" when dimensionless or unknown).
+Units = Mapping[str, tuple[str, str]]
+
 #: What a spreadsheet reads as the start of a formula (OWASP, CSV injection).
 FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
@@ -57,10 +69,16 @@ def csv_cell(value: Any) -> Any:
     return value
 
 
-def _csv(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
+def header(column: str, units: Units) -> str:
+    """A CSV header cell: ``key [unit]``, or ``key`` when it has no unit."""
+    unit = units.get(column, ("", ""))[0]
+    return f"{column} [{unit}]" if unit else column
+
+
+def _csv(columns: Sequence[str], rows: Iterable[Sequence[Any]], units: Units) -> Iterator[bytes]:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\r\n")
-    writer.writerow([csv_cell(c) for c in columns])
+    writer.writerow([csv_cell(header(c, units)) for c in columns])
     n = 0
     for row in rows:
         writer.writerow([csv_cell(v) for v in row])
@@ -72,8 +90,13 @@ def _csv(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[byte
     yield buf.getvalue().encode()
 
 
-def _json(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
-    yield b'{"columns":' + json.dumps(list(columns)).encode() + b',"rows":['
+def _json(columns: Sequence[str], rows: Iterable[Sequence[Any]], units: Units) -> Iterator[bytes]:
+    yield (
+        b'{"columns":' + json.dumps(list(columns)).encode()
+        + b',"units":' + json.dumps({c: units.get(c, ("", ""))[0] for c in columns}).encode()
+        + b',"labels":' + json.dumps({c: units.get(c, ("", c))[1] for c in columns}).encode()
+        + b',"rows":['
+    )  # fmt: skip
     first = True
     for row in rows:
         items = [v.isoformat() if isinstance(v, datetime) else v for v in row]
@@ -83,7 +106,9 @@ def _json(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[byt
     yield b"]}"
 
 
-def _parquet(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
+def _parquet(
+    columns: Sequence[str], rows: Iterable[Sequence[Any]], units: Units
+) -> Iterator[bytes]:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -97,20 +122,33 @@ def _parquet(columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[
             arrays.append(pa.array(values))
         except (pa.ArrowInvalid, pa.ArrowTypeError):  # mixed types: as text
             arrays.append(pa.array([None if v is None else str(v) for v in values]))
-    table = pa.Table.from_arrays(arrays, names=list(columns))
+    fields = [
+        pa.field(c, a.type, metadata={"unit": units.get(c, ("", ""))[0],
+                                      "label": units.get(c, ("", c))[1]})
+        for c, a in zip(columns, arrays, strict=True)
+    ]  # fmt: skip
+    meta = {
+        "legopt.units": json.dumps({c: units.get(c, ("", ""))[0] for c in columns}),
+        "legopt.labels": json.dumps({c: units.get(c, ("", c))[1] for c in columns}),
+    }
+    table = pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata=meta))
     out = io.BytesIO()
     pq.write_table(table, out)
     yield out.getvalue()
 
 
-def encode(fmt: str, columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> Iterator[bytes]:
-    """The bytes of the table in ``fmt`` (``csv``, ``json`` or ``parquet``), in chunks."""
+def encode(
+    fmt: str, columns: Sequence[str], rows: Iterable[Sequence[Any]], units: Units | None = None
+) -> Iterator[bytes]:
+    """The bytes of the table in ``fmt`` (``csv``, ``json`` or ``parquet``), in chunks, with
+    the columns' ``units`` and labels (module docstring)."""
+    units = units or {}
     if fmt == "csv":
-        return _csv(columns, rows)
+        return _csv(columns, rows, units)
     if fmt == "json":
-        return _json(columns, rows)
+        return _json(columns, rows, units)
     if fmt == "parquet":
-        return _parquet(columns, rows)
+        return _parquet(columns, rows, units)
     raise ValueError(f"format: expected one of {', '.join(FORMATS)}, got {fmt!r}")
 
 

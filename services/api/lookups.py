@@ -1,6 +1,7 @@
 """What the routes share: the caller's job, sweep or robot by id (404 when missing or another
-key's), the jobs page's filters (a FastAPI dependency), a sweep's cell table and writing the
-labels of a key's new jobs. Routes import these from here, never from one another."""
+key's; the job of the path also as the FastAPI dependency ``OwnedJob``), the jobs page's
+filters (a FastAPI dependency), a sweep's cell table and writing the labels of a key's new
+jobs. Routes import these from here, never from one another."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from typing import Annotated, Any
 from fastapi import Depends, Query
 from sqlalchemy.orm import Session
 
-from services.api.deps import ApiContext
+from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.errors import not_found
 from services.api.quantities import describe
 from services.api.sweep_cells import CellTable, build_cells
@@ -32,6 +33,18 @@ def owned_job(session: Session, job_id: str, owner_key_id: str) -> JobRecord:
     if job is None:
         raise not_found("job", job_id)
     return job
+
+
+def path_job(job_id: str, key: CurrentKey, ctx: Context) -> JobRecord:
+    """The caller's job of the path's ``job_id``, read in a transaction of its own; 404 when
+    missing or another key's (``owned_job``)."""
+    with ctx.read() as session:
+        return owned_job(session, job_id, key.id)
+
+
+#: The caller's job of the path's ``job_id`` (its frozen record), for a route that needs
+#: nothing else from the database in the same transaction; 404 when missing or another key's.
+OwnedJob = Annotated[JobRecord, Depends(path_job)]
 
 
 def owned_sweep_jobs(
@@ -127,8 +140,9 @@ def job_filter(
     ] = None,  # fmt: skip
     feasible: Annotated[
         bool | None,
-        Query(description="Only succeeded jobs whose optimum is feasible (true) / infeasible "
-              "(false)."),
+        Query(
+            description="Only succeeded jobs whose optimum is feasible (true) / infeasible (false)."
+        ),
     ] = None,  # fmt: skip
 ) -> dq.JobFilter:
     """The filters of the jobs page (query parameters)."""
@@ -149,10 +163,12 @@ Filters = Annotated[dq.JobFilter, Depends(job_filter)]
 
 __all__ = [
     "Filters",
+    "OwnedJob",
     "cell_table",
     "job_filter",
     "owned_job",
     "owned_sweep_jobs",
+    "path_job",
     "robot_lookup",
     "study_defaults",
     "study_kind",

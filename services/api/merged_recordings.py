@@ -11,6 +11,10 @@ Bounds (issue 22): each child holds the member recordings in memory (~120 MB for
 so at most :data:`MERGE_WORKERS` merges run at once per API process, at most
 :data:`MAX_PENDING` distinct merges wait or run (beyond that: 429 with ``Retry-After``), and
 parallel requests for the same merge share one child (``services.api.bounded_work``).
+
+The members may be given as a function returning a context of local files (an S3 artifact
+store downloads them to temporary files): it is entered only when the merge is made (not for a
+cached one), inside the bounded work, and left when the child is done.
 """
 
 from __future__ import annotations
@@ -20,10 +24,14 @@ import json
 import os
 import subprocess
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import AbstractContextManager, ExitStack, contextmanager
 from pathlib import Path
+from typing import Any
 
 from services.api.bounded_work import BoundedWork
+from services.store.artifacts import ArtifactStore
+from services.store.errors import ArtifactMissingError
 
 #: Bytes of merged files kept in the cache (least recently used removed first).
 KEEP_BYTES = 1 << 30
@@ -47,6 +55,35 @@ _CHILD = (
 )
 
 
+#: The member recordings: local files, or a function returning a context that holds them.
+Members = Sequence[Path] | Callable[[], AbstractContextManager[Sequence[Path]]]
+
+
+def stored_members(
+    store: ArtifactStore, members: Sequence[tuple[str, Any]]
+) -> Callable[[], AbstractContextManager[Sequence[Path]]]:
+    """The ``Members`` of ``(job id, recording ArtifactRecord)`` pairs: local files verified
+    against their SHA-256 (downloaded first from a remote store); one that is gone is an
+    ``ArtifactMissingError`` (404) naming its job."""
+
+    @contextmanager
+    def local() -> Iterator[Sequence[Path]]:
+        with ExitStack() as stack:
+            paths = []
+            for job_id, art in members:
+                try:
+                    copy = store.local_copy(art.relative_path, art.sha256)
+                    paths.append(stack.enter_context(copy))
+                except ArtifactMissingError:
+                    raise ArtifactMissingError(
+                        f"the recording of job {job_id} is missing from the artifact store "
+                        f"(recorded as {art.relative_path}): choose the others with ?jobs=…"
+                    ) from None
+            yield paths
+
+    return local
+
+
 def merge_key(names: Sequence[str], digests: Sequence[str]) -> str:
     """Content key of a merge: the members' names and recording SHA-256, in order."""
     doc = json.dumps([list(names), list(digests)], separators=(",", ":"))
@@ -54,7 +91,7 @@ def merge_key(names: Sequence[str], digests: Sequence[str]) -> str:
 
 
 def merged_recording(
-    paths: Sequence[Path], names: Sequence[str], digests: Sequence[str], cache_dir: Path
+    paths: Members, names: Sequence[str], digests: Sequence[str], cache_dir: Path
 ) -> Path:
     """Path of the merged recording of ``paths`` (made now in a child process unless cached;
     bounded and shared as the module docstring says).
@@ -73,10 +110,13 @@ def merged_recording(
     return _work.run(key, lambda: _merge(paths, names, out), f"the merged recording {key[:8]}")
 
 
-def _merge(paths: Sequence[Path], names: Sequence[str], out: Path) -> Path:
+def _merge(paths: Members, names: Sequence[str], out: Path) -> Path:
     """Merge in a child process into ``out`` (kept if another request made it meanwhile)."""
     if out.is_file():
         return out
+    if callable(paths):
+        with paths() as local:
+            return _merge(local, names, out)
     arg = json.dumps({"paths": [str(p) for p in paths], "out": str(out), "names": list(names)})
     try:
         done = subprocess.run(

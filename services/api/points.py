@@ -19,7 +19,8 @@ recording is kept the same way as ``baseline-<i>`` (its position among the job's
 name). The metrics of a front's points (the front table's and export's columns) are decoded
 together, once — one problem built, then milliseconds per point (about 2 ms for seed 002, 10
 ms for seed 004 on the development machine) — and kept as the artifact ``front-metrics``
-(JSON).
+(JSON). A cached file whose file or object is gone (or corrupted, for the metrics) is made
+again; an artifact store that cannot be reached leaves the metrics ``unavailable``.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from services.api.bounded_work import BoundedWork
 from services.api.deps import ApiContext
 from services.store import output_queries as oq
 from services.store import repository as repo
+from services.store.errors import ArtifactError, ArtifactMissingError, ChecksumMismatchError
 from services.store.records import ArtifactRecord, JobRecord
 from services.store.tables import JobStatus
 
@@ -81,6 +83,16 @@ def _attempt_dir(ctx: ApiContext, job_id: str) -> str | None:
     return parts[1] if len(parts) == 3 else None
 
 
+def _still_stored(ctx: ApiContext, record: ArtifactRecord | None) -> ArtifactRecord | None:
+    """``record`` (a file made on demand) while its file or object is stored; None — its row
+    removed, so that it is made again — when it is gone."""
+    if record is None or ctx.artifacts.exists(record.relative_path):
+        return record
+    with ctx.write() as session:
+        oq.forget_artifact(session, record.job_id, record.kind, record.sha256)
+    return None
+
+
 def _fronts(ctx: ApiContext, job_id: str) -> dict[int, Any] | None:
     """{generation: F} of the job's stored per-generation fronts (the latest ones)."""
     fronts: dict[int, Any] = {}
@@ -104,6 +116,7 @@ def point_recording(ctx: ApiContext, job: JobRecord, k: int) -> ArtifactRecord:
     with ctx.read() as session:
         existing = repo.get_artifact(session, job.id, kind)
         point = oq.get_pareto_point(session, job.id, k)
+    existing = _still_stored(ctx, existing)
     if existing is not None:
         return existing
     if point is None:
@@ -116,6 +129,49 @@ def point_recording(ctx: ApiContext, job: JobRecord, k: int) -> ArtifactRecord:
         return decode_point(spec, x)
 
     return _solution_recording(ctx, job, kind, f"front point {k}", decode)
+
+
+def trial_kind(t: int) -> str:
+    """The artifact kind of trial ``t``'s recording."""
+    return f"trial-{int(t)}"
+
+
+def trial_x(ctx: ApiContext, job: JobRecord, t: int) -> list[float]:
+    """The decision vector of the job's stored trial ``t``; 404 when there is no such trial."""
+    from services.store.evaluations import load_evaluations
+
+    with ctx.read() as session:
+        ev = load_evaluations(session, job.id)
+    if ev is None or not 0 <= t < len(ev):
+        stored = 0 if ev is None else len(ev)
+        raise HTTPException(
+            status.HTTP_404_NOT_FOUND, f"job {job.id} has no trial {t} ({stored} stored)"
+        )
+    return [float(v) for v in ev.X[t]]
+
+
+def trial_recording(ctx: ApiContext, job: JobRecord, t: int) -> ArtifactRecord:
+    """The stored recording of trial ``t`` (any evaluated solution) of a succeeded job, made
+    first if needed; 404 for no such trial, 409 when it cannot be decoded, 503 while made."""
+    if job.status is not JobStatus.SUCCEEDED:
+        raise HTTPException(
+            status.HTTP_409_CONFLICT,
+            f"job {job.id} is {job.status.value}: a trial's recording exists once it succeeded",
+        )
+    kind = trial_kind(t)
+    with ctx.read() as session:
+        existing = repo.get_artifact(session, job.id, kind)
+    existing = _still_stored(ctx, existing)
+    if existing is not None:
+        return existing
+    x = trial_x(ctx, job, t)
+
+    def decode(spec: Any) -> Any:
+        from services.recording.point import decode_point
+
+        return decode_point(spec, x)
+
+    return _solution_recording(ctx, job, kind, f"trial {t}", decode)
 
 
 def baseline_kind(names: list[str], name: str) -> str:
@@ -138,6 +194,7 @@ def baseline_recording(ctx: ApiContext, job: JobRecord, name: str) -> ArtifactRe
     kind = baseline_kind(names, name)
     with ctx.read() as session:
         existing = repo.get_artifact(session, job.id, kind)
+    existing = _still_stored(ctx, existing)
     if existing is not None:
         return existing
 
@@ -206,8 +263,19 @@ def _metric_values(metrics: Any) -> dict[str, float | None]:
     return out
 
 
-def _read_front_metrics(ctx: ApiContext, art: ArtifactRecord) -> dict[int, dict[str, Any] | None]:
-    doc = json.loads(ctx.artifacts.read(art.relative_path, art.sha256))
+def _read_front_metrics(
+    ctx: ApiContext, art: ArtifactRecord | None
+) -> dict[int, dict[str, Any] | None] | None:
+    """The stored front metrics; None when there are none, or their file or object is gone
+    or corrupted (its row is then removed: they are made again)."""
+    if art is None:
+        return None
+    try:
+        doc = json.loads(ctx.artifacts.read(art.relative_path, art.sha256))
+    except (ArtifactMissingError, ChecksumMismatchError):
+        with ctx.write() as session:
+            oq.forget_artifact(session, art.job_id, art.kind, art.sha256)
+        return None
     return {int(k): v for k, v in (doc.get("points") or {}).items()}
 
 
@@ -219,16 +287,19 @@ def front_metrics(ctx: ApiContext, job: JobRecord) -> dict[int, dict[str, Any] |
     they are being computed (longer than ``WAIT_S``)."""
     with ctx.read() as session:
         existing = repo.get_artifact(session, job.id, FRONT_METRICS)
-    if existing is not None:
-        return _read_front_metrics(ctx, existing)
+    stored = _read_front_metrics(ctx, existing)
+    if stored is not None:
+        return stored
 
     def make() -> dict[int, dict[str, Any] | None]:
         from services.recording.point import PointError, decode_point, prepare_cached
 
         with ctx.read() as session:
             done = repo.get_artifact(session, job.id, FRONT_METRICS)
-            if done is not None:
-                return _read_front_metrics(ctx, done)
+        again = _read_front_metrics(ctx, done)
+        if again is not None:
+            return again
+        with ctx.read() as session:
             spec = repo.job_spec(session, job)
             points = repo.list_pareto(session, job.id)
         if not points:
@@ -267,6 +338,8 @@ def point_metrics(
         return {}, "ready", None
     try:
         return front_metrics(ctx, job), "ready", None
+    except ArtifactError as exc:  # the store cannot be reached: the rest of the page can
+        return {}, "unavailable", f"the points' metrics cannot be read now: {exc}"
     except HTTPException as exc:
         if exc.status_code == status.HTTP_503_SERVICE_UNAVAILABLE:
             return {}, "pending", "the points' metrics are being computed: ask again shortly"
@@ -276,12 +349,23 @@ def point_metrics(
 
 
 def point_motion(
-    ctx: ApiContext, job: JobRecord, *, point: int | None, baseline: str | None
+    ctx: ApiContext,
+    job: JobRecord,
+    *,
+    point: int | None,
+    baseline: str | None,
+    trial: int | None = None,
 ) -> dict[str, Any]:
-    """The decoded solution (front point, baseline, or the reported best when neither) of a
-    succeeded job: its objectives, metrics and joint signals (``MotionOut`` fields)."""
-    source = "point" if point is not None else "baseline" if baseline is not None else "best"
-    ident = f"motion:{source}:{point if point is not None else baseline or ''}"
+    """The decoded solution (front point, baseline, stored trial, or the reported best when
+    none) of a succeeded job: its objectives, metrics and joint signals (``MotionOut``)."""
+    source = (
+        "point" if point is not None
+        else "baseline" if baseline is not None
+        else "trial" if trial is not None
+        else "best"
+    )  # fmt: skip
+    index = point if point is not None else trial
+    ident = f"motion:{source}:{index if index is not None else baseline or ''}"
     key = (job.id, ident)
     with _lock:
         cached = _motions.get(key)
@@ -296,6 +380,7 @@ def point_motion(
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no result yet")
     if point is not None and stored is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {point}")
+    trial_vector = trial_x(ctx, job, trial) if trial is not None else None
 
     def make() -> dict[str, Any]:
         from services.recording.point import (
@@ -309,7 +394,7 @@ def point_motion(
             if baseline is not None:
                 decoded = decode_baseline(spec, baseline)
             else:
-                x = stored.x if stored is not None else result.best_x
+                x = stored.x if stored is not None else trial_vector or result.best_x
                 decoded = decode_point(spec, x or [])
         except PointError as exc:
             raise _point_error(exc) from None
@@ -317,7 +402,7 @@ def point_motion(
         return {
             "job_id": job.id,
             "source": source,
-            "index": point,
+            "index": index,
             "name": baseline,
             "x": None if sol.x is None else [float(v) for v in sol.x],
             "objectives": {k: float(v) for k, v in sol.objectives.items()},

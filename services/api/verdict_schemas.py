@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, JsonValue
 
 __all__ = [
     "FEASIBLE_DESCRIPTION",
@@ -58,7 +58,10 @@ class TaskOut(BaseModel):
     """The task a job ran: the study's parameters with every robot-relative default filled in
     for its robot, and the rule that gave each derived value."""
 
-    params: dict[str, Any] = Field(description="The study parameters the job ran with.")
+    params: dict[str, JsonValue] = Field(
+        description="The study parameters the job ran with (the fields of its kind's "
+        "`params_schema` in `GET /studies`: any JSON, each study's own)."
+    )
     rules: dict[str, str] = Field(
         default_factory=dict,
         description="Parameter -> the rule (words with numbers) that derived its value from "
@@ -115,9 +118,21 @@ class GapOut(BaseModel):
         """From the ``gap`` a worker stores in the result summary (None when absent)."""
         if not isinstance(doc, dict):
             return None
-        num = lambda k: (float(doc[k]) if isinstance(doc.get(k), int | float)  # noqa: E731
-                         and not isinstance(doc.get(k), bool) else None)
-        text = lambda k: str(doc[k]) if isinstance(doc.get(k), str) else None  # noqa: E731
-        return cls(objective=text("objective"), value=num("value"), reference=num("reference"),
-                   kind=text("kind"), method=text("method"), pct=num("pct"),
-                   reason=text("reason"))
+
+        def num(k: str) -> float | None:
+            v = doc.get(k)
+            return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+
+        def text(k: str) -> str | None:
+            v = doc.get(k)
+            return v if isinstance(v, str) else None
+
+        return cls(
+            objective=text("objective"),
+            value=num("value"),
+            reference=num("reference"),
+            kind=text("kind"),
+            method=text("method"),
+            pct=num("pct"),
+            reason=text("reason"),
+        )

@@ -11,12 +11,15 @@ Typical use::
 Modules: ``settings`` (``Settings``, ``get_settings``), ``tables`` (the schema), ``session``
 (engines, ``session_scope``), ``records`` (frozen records handed out), ``repository``
 (create/get/list), ``lifecycle`` (claims, leases, progress, outcome, reaper), ``artifacts``
-(local artifact store), ``keys`` (API key hashing), ``migrate`` (Alembic from Python).
+(the artifact store: a local directory or S3), ``keys`` (API key hashing), ``migrate``
+(Alembic from Python).
 """
 
 from services.store.artifacts import ArtifactStore, StoredFile
 from services.store.errors import (
     ArtifactError,
+    ArtifactMissingError,
+    ArtifactUnavailableError,
     ChecksumMismatchError,
     ConflictError,
     LeaseLostError,
@@ -99,8 +102,10 @@ __all__ = [
     "ApiKeyRecord",
     "ArtifactError",
     "ArtifactIn",
+    "ArtifactMissingError",
     "ArtifactRecord",
     "ArtifactStore",
+    "ArtifactUnavailableError",
     "Base",
     "BaselineIn",
     "BaselineRecord",

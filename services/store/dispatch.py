@@ -41,9 +41,7 @@ def backoff_schedule(lease_s: float) -> tuple[float, ...]:
 
 def and_queued(condition: ColumnElement[bool]) -> ColumnElement[bool]:
     """``condition`` and the job is queued without a cancellation request."""
-    return (
-        (JOBS.c.status == JobStatus.QUEUED) & JOBS.c.cancel_requested.is_(False) & condition
-    )
+    return (JOBS.c.status == JobStatus.QUEUED) & JOBS.c.cancel_requested.is_(False) & condition
 
 
 def _next_due(now: datetime, backoff_s: Sequence[float]) -> ColumnElement[datetime]:
@@ -148,9 +146,7 @@ def release_sends(
         .where(JOBS.c.id.in_(list(job_ids)), JOBS.c.status == JobStatus.QUEUED)
         .values(
             dispatch_due_at=retry_at,
-            dispatch_count=case(
-                (JOBS.c.dispatch_count > 0, JOBS.c.dispatch_count - 1), else_=0
-            ),
+            dispatch_count=case((JOBS.c.dispatch_count > 0, JOBS.c.dispatch_count - 1), else_=0),
         )
     )
 

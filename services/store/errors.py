@@ -29,3 +29,13 @@ class UnsafePathError(ArtifactError, ValueError):
 
 class ChecksumMismatchError(ArtifactError):
     """An artifact's bytes do not match the sha256 recorded for it."""
+
+
+class ArtifactMissingError(ArtifactError, FileNotFoundError):
+    """A recorded artifact's file or object is not in the artifact store (the API: 404
+    naming it; the database's rows stay readable)."""
+
+
+class ArtifactUnavailableError(ArtifactError):
+    """The artifact store cannot be reached or refuses access (object store down, network,
+    credentials, no such bucket): the API answers 503 with ``Retry-After``."""

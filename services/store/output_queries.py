@@ -13,7 +13,7 @@ from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
-from sqlalchemy import and_, func, or_, select, update
+from sqlalchemy import and_, delete, func, or_, select, update
 from sqlalchemy.orm import Session
 
 from services.store.front_codec import decode_front_array
@@ -83,6 +83,17 @@ def add_artifact(
         },
         ["job_id", "kind"],
     )
+
+
+def forget_artifact(session: Session, job_id: str, kind: str, sha256: str) -> bool:
+    """Remove the row of a file made after the job finished whose file or object is gone (it
+    is then made again on demand); only the row with this ``sha256`` (not a remade one)."""
+    done = session.execute(
+        delete(ARTIFACTS).where(
+            ARTIFACTS.c.job_id == job_id, ARTIFACTS.c.kind == kind, ARTIFACTS.c.sha256 == sha256
+        )
+    )
+    return bool(getattr(done, "rowcount", 0))
 
 
 # --------------------------------------------------------------------------- convergence
@@ -164,6 +175,7 @@ __all__ = [
     "best_front_minimum",
     "final_hypervolumes",
     "fold_minimum",
+    "forget_artifact",
     "front_minimum",
     "fronts_of",
     "get_hypervolume_ref",

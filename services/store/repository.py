@@ -518,9 +518,7 @@ def result_briefs(session: Session, job_ids: Iterable[str]) -> dict[str, tuple[A
 def get_result_objectives(session: Session, job_id: str) -> Any:
     """Only the ``objectives`` JSON of a job's result (None until it has succeeded) — without
     the (possibly large) summary, for the front and sweep views."""
-    row = session.execute(
-        select(RESULTS.c.objectives).where(RESULTS.c.job_id == job_id)
-    ).first()
+    row = session.execute(select(RESULTS.c.objectives).where(RESULTS.c.job_id == job_id)).first()
     return None if row is None else copy.deepcopy(row[0])
 
 

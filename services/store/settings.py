@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
 from collections.abc import Mapping
 from functools import lru_cache
 from pathlib import Path
@@ -21,6 +22,28 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 ENV_PREFIX = "LEGOPT_"
 DEFAULT_DATA_DIR = Path("legopt-data")
+
+
+_BUCKET = re.compile(r"^[a-z0-9][a-z0-9.-]{1,61}[a-z0-9]$")
+_PREFIX_PART = re.compile(r"^[A-Za-z0-9._-]+$")
+
+
+def split_s3_url(url: str) -> tuple[str, str]:
+    """``"s3://bucket/some/prefix"`` -> ``("bucket", "some/prefix")`` (prefix without slashes at
+    either end, possibly empty); ValueError for anything else."""
+    if not url.startswith("s3://"):
+        raise ValueError(f"artifacts_url {url!r}: expected s3://bucket/prefix (or empty)")
+    bucket, _, prefix = url[len("s3://") :].partition("/")
+    if not _BUCKET.match(bucket):
+        raise ValueError(f"artifacts_url {url!r}: {bucket!r} is not an S3 bucket name")
+    prefix = prefix.strip("/")
+    parts = prefix.split("/") if prefix else []
+    if any(p in (".", "..") or not _PREFIX_PART.match(p) for p in parts):
+        raise ValueError(
+            f"artifacts_url {url!r}: the key prefix may hold letters, digits, '.', '_', '-' "
+            "and '/' between names"
+        )
+    return bucket, prefix
 
 
 class Settings(BaseModel):
@@ -51,6 +74,27 @@ class Settings(BaseModel):
     artifact_dir: Path = Field(
         default=Path(),
         description="Directory of the local artifact store; default <data_dir>/artifacts.",
+    )
+    artifacts_url: str = Field(
+        default="",
+        description="Where artifacts are stored: '' the local directory artifact_dir; "
+        "'s3://bucket/prefix' an S3-compatible object store (endpoint: s3_endpoint_url; "
+        "credentials and region: boto3's usual chain, e.g. AWS_ACCESS_KEY_ID, "
+        "AWS_SECRET_ACCESS_KEY, AWS_REGION).",
+    )
+    s3_endpoint_url: str = Field(
+        default="",
+        description="Endpoint of the S3-compatible store (MinIO, moto, ...); '': "
+        "AWS_ENDPOINT_URL_S3 or AWS_ENDPOINT_URL when set, else AWS's own.",
+    )
+    artifacts_presign: bool = Field(
+        default=False,
+        description="Recording downloads from an S3 store answer 307 to a presigned URL of "
+        "the object instead of streaming it through the API (the store's endpoint must then "
+        "be reachable by the clients).",
+    )
+    artifacts_presign_seconds: int = Field(
+        default=300, gt=0, le=7 * 86_400, description="Lifetime of a presigned URL, seconds."
     )
     mesh_roots: str = Field(
         default="",
@@ -124,6 +168,12 @@ class Settings(BaseModel):
     rate_limit_burst: int = Field(
         default=500, gt=0, description="Requests one API key may make at once before limiting."
     )
+    event_stream_s: float = Field(
+        default=600.0,
+        gt=0,
+        description="Seconds a job's event stream (GET /jobs/{id}/events) stays open at most; "
+        "the page then opens a new one.",
+    )
     validation_processes: int = Field(
         default=1,
         ge=0,
@@ -169,6 +219,17 @@ class Settings(BaseModel):
                 f"lease_seconds ({self.lease_seconds})"
             )
         return self
+
+    @model_validator(mode="after")
+    def _check_artifacts_url(self) -> Settings:
+        if self.artifacts_url:
+            split_s3_url(self.artifacts_url)  # ValueError naming what is wrong
+        return self
+
+    @property
+    def artifacts_s3(self) -> tuple[str, str] | None:
+        """``(bucket, key prefix)`` of the S3 artifact store, None for the local directory."""
+        return split_s3_url(self.artifacts_url) if self.artifacts_url else None
 
     @property
     def broker_dir(self) -> Path:

@@ -26,6 +26,7 @@ R = TypeVar("R")
 
 MAX_PAGE_SIZE = 1000
 
+
 def now_utc(now: datetime | None = None) -> datetime:
     """``now`` converted to UTC (must be timezone-aware), or the current UTC time."""
     return utcnow() if now is None else as_utc(now)

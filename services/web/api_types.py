@@ -12,7 +12,9 @@ when the committed file differs from what the API generates now.
 Only the responses of the endpoints in ``DASHBOARD_ENDPOINTS`` (and the schemas they refer
 to) are declared; an endpoint missing from the API is an error. A response holds every field
 of its model (FastAPI serialises the defaults too), so every property is declared present;
-a field whose schema says nothing (``Any``) is ``unknown``.
+a stored document passed on as stored (its schema says ``x-optional-keys``) may lack the keys
+outside its ``required`` (``key?:``); a value whose schema says nothing (``JsonValue``: any
+JSON, a study's own) is ``unknown``.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from services.web import STATIC_DIR
 
 __all__ = [
     "DASHBOARD_ENDPOINTS",
+    "OPTIONAL_KEYS",
     "OUTPUT",
     "ApiTypesError",
     "main",
@@ -53,6 +56,10 @@ DASHBOARD_ENDPOINTS: tuple[tuple[str, str], ...] = (
     ("GET", "/jobs/{job_id}/front"),
     ("GET", "/jobs/{job_id}/result"),
     ("GET", "/jobs/{job_id}/motion"),
+    ("GET", "/jobs/{job_id}/front/live"),
+    ("GET", "/jobs/{job_id}/trials"),
+    ("GET", "/jobs/{job_id}/trials/columns"),
+    ("GET", "/jobs/{job_id}/trials/importance"),
     ("GET", "/robots"),
     ("GET", "/sweeps"),
     ("GET", "/sweeps/{sweep_id}"),
@@ -60,6 +67,9 @@ DASHBOARD_ENDPOINTS: tuple[tuple[str, str], ...] = (
     ("GET", "/sweeps/{sweep_id}/fronts"),
 )
 _REF = "#/components/schemas/"
+#: Set (true) on the schema of a stored document the API passes on as stored (a ``TypedDict``
+#: with ``services.api.schemas.STORED_DOC``): its properties outside ``required`` may be absent.
+OPTIONAL_KEYS = "x-optional-keys"
 _IDENTIFIER = re.compile(r"^[A-Za-z_$][A-Za-z0-9_$]*$")
 _SIMPLE_TYPE = re.compile(r"^[A-Za-z_$][A-Za-z0-9_$.]*$")
 _HEADER = """\
@@ -67,7 +77,8 @@ _HEADER = """\
 // edit (run that command to update it; tests/web/test_api_types_current.py checks it is current).
 // The responses of the endpoints the dashboard calls (services/web/api_types.py lists them)
 // and the schemas they use. A response holds every field of its model, so every property is
-// present; `unknown`: the API's schema says nothing of the value (Any).
+// present, but for a stored document (`x-optional-keys`) whose keys may be absent (`?`);
+// `unknown`: any JSON (JsonValue: a study's or an optimiser's own).
 """
 
 
@@ -204,9 +215,12 @@ class _Translator:
 
     def members(self, schema: dict[str, Any], indent: str) -> list[str]:
         lines: list[str] = []
+        required = set(schema.get("required") or ())
+        optional = schema.get(OPTIONAL_KEYS) is True  # a stored document: keys may be absent
         for name, prop in (schema.get("properties") or {}).items():
             lines += _comment(prop.get("description") if isinstance(prop, dict) else None, indent)
-            lines.append(f"{indent}{_property_name(name)}: {self.type(prop, indent)};")
+            mark = "?" if optional and name not in required else ""
+            lines.append(f"{indent}{_property_name(name)}{mark}: {self.type(prop, indent)};")
         return lines
 
 

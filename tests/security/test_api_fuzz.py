@@ -79,6 +79,7 @@ def _real_ids(client: TestClient, ctx: ApiContext, headers: dict[str, str]) -> d
         "job_id": job_id,
         "sweep_id": sweep.json()["id"],
         "k": "0",
+        "t": "0",
         "name": "parabolic",  # the baseline finish_like_a_worker stores
     }
 
@@ -88,7 +89,9 @@ def _app_and_admin(settings: Settings) -> tuple[Any, dict[str, str]]:
     headers of an admin key, so the key routes are fuzzed beyond their 403."""
     sent: list[str] = []
     app = create_app(
-        settings.with_overrides(rate_limit_per_s=1e9, rate_limit_burst=10**9), enqueue=sent.append
+        # event streams of queued jobs end at once (a fuzzer waits for each response's end)
+        settings.with_overrides(rate_limit_per_s=1e9, rate_limit_burst=10**9, event_stream_s=0.01),
+        enqueue=sent.append,
     )
     raw, key_hash = generate_api_key()
     with app.state.context.write() as session:

@@ -103,7 +103,7 @@ def tenants(db_settings: Settings) -> Iterator[Tenants]:
         job_ids.append(r.json()["id"])
         ids = {"robot_id": robot_id, "job_id": job_ids[0], "sweep_id": sweep_id}
         ids["key_id"] = alice_key_id
-        ids["k"] = "0"
+        ids["k"] = ids["t"] = "0"  # a front point, a trial
         ids["name"] = "parabolic"  # the baseline finish_like_a_worker stores
         yield Tenants(app, client, alice, bob, ids, job_ids)
 
@@ -203,7 +203,7 @@ def test_every_route_with_a_path_id_is_404_for_another_key(tenants: Tenants) -> 
 
 
 def test_listings_of_another_key_never_show_alice_items(tenants: Tenants) -> None:
-    alice_ids = [v for name, v in tenants.ids.items() if name not in ("k", "name")]
+    alice_ids = [v for name, v in tenants.ids.items() if name not in ("k", "t", "name")]
     alice_ids += tenants.alice_job_ids
     listings = [c for c in app_routes(tenants.app) if c.method == "GET" and not c.params]
     assert len(listings) >= 5, listings

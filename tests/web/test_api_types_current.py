@@ -92,3 +92,24 @@ def test_an_endpoint_the_dashboard_calls_must_exist() -> None:
     doc = _doc({}, {"type": "string"})
     with pytest.raises(api_types.ApiTypesError, match="GET /gone: not an endpoint"):
         api_types.render(doc, (("GET", "/gone"),))
+
+
+def test_a_stored_document_may_lack_its_optional_keys() -> None:
+    """A ``TypedDict`` passed on as stored (``x-optional-keys``) declares the keys outside its
+    ``required`` optional, and the keys it does not name as an index signature."""
+    schemas = {
+        "Doc": {
+            "type": "object",
+            "properties": {"name": {"type": "string"}, "value": {"type": "number"}},
+            "required": ["name"],
+            "additionalProperties": True,
+            api_types.OPTIONAL_KEYS: True,
+        }
+    }
+    out = api_types.render(
+        _doc(schemas, {"$ref": "#/components/schemas/Doc"}), (("GET", "/things/{thing_id}"),)
+    )
+    assert (
+        "export interface Doc {\n  name: string;\n  value?: number;\n  [key: string]: unknown;\n}"
+        in out
+    )

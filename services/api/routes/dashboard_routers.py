@@ -6,11 +6,13 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from services.api.routes import dashboard, exports, job_views, sweep_views
+from services.api.routes import dashboard, exports, job_views, live, sweep_views, trials
 
 DASHBOARD_ROUTERS: tuple[APIRouter, ...] = (
     dashboard.router,
     job_views.router,
+    trials.router,
+    live.router,
     sweep_views.router,
     exports.router,
 )

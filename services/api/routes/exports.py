@@ -12,9 +12,10 @@ from fastapi.responses import StreamingResponse
 from services.api.convergence import ConvergenceRow, convergence
 from services.api.dashboard_schemas import BaselineMark
 from services.api.deps import ApiContext, Context, CurrentKey
-from services.api.export_formats import MEDIA_TYPES, ExportFormat, encode, filename
+from services.api.export_formats import MEDIA_TYPES, ExportFormat, Units, encode, filename
 from services.api.lookups import Filters, cell_table, owned_job, sync_labels
 from services.api.points import point_metrics
+from services.api.quantities import describe
 from services.api.schemas import ErrorOut, objective_names
 from services.api.sweep_cells import mean_sd
 from services.store import dashboard_queries as dq
@@ -37,12 +38,41 @@ JOB_COLUMNS = (
 EXPORT_PAGE = 1000
 
 
-def _download(fmt: str, stem: str, columns: Any, rows: Any) -> StreamingResponse:
+def _download(
+    fmt: str, stem: str, columns: Any, rows: Any, units: Units | None = None
+) -> StreamingResponse:
     return StreamingResponse(
-        encode(fmt, list(columns), rows),
+        encode(fmt, list(columns), rows, units),
         media_type=MEDIA_TYPES[fmt],
         headers={"Content-Disposition": f'attachment; filename="{filename(stem, fmt)}"'},
     )
+
+
+def _unit(key: str, kind: str | None) -> tuple[str, str]:
+    """``(unit, label)`` of a result key (a ``neg_`` objective: of the quantity it negates)."""
+    from legcore.studies.metric_names import display_objective
+
+    d = describe(display_objective(key, None)[0], kind)
+    return d["unit"], d["label"]
+
+
+def _shown(names: list[str]) -> tuple[list[str], list[bool]]:
+    """The objectives' exported keys (``neg_<m>`` as ``<m>``: one sign per quantity, the
+    quantity's own) and which of them are flipped."""
+    from legcore.studies.metric_names import display_objective
+
+    shown = [display_objective(n, None)[0] for n in names]
+    return shown, [s != n for s, n in zip(shown, names, strict=True)]
+
+
+def _signed(values: Any, flip: list[bool]) -> list[Any]:
+    return [-v if f and isinstance(v, int | float) else v
+            for v, f in zip(values, flip, strict=False)]  # fmt: skip
+
+
+def _kind(job: Any) -> str | None:
+    facts = job.facts if isinstance(job.facts, dict) else {}
+    return facts.get("kind") if isinstance(facts.get("kind"), str) else None
 
 
 def _first(best: Any) -> Any:
@@ -121,20 +151,26 @@ def export_front(
         )
     m = max((len(p.objectives or []) for p in points), default=len(names))
     names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
+    shown, flip = _shown(names)
     n = max((len(p.x or []) for p in points), default=0)
-    metrics = list(dict.fromkeys(k for v in per_point.values() if v for k in v))
-    columns = ["index", *names, *[f"metric.{k}" for k in metrics], *[f"x{i + 1}" for i in range(n)],
+    # a metric that is also an objective is the objective's column (one column per quantity)
+    metrics = [k for k in dict.fromkeys(k for v in per_point.values() if v for k in v)
+               if k not in shown]  # fmt: skip
+    columns = ["index", *shown, *[f"metric.{k}" for k in metrics], *[f"x{i + 1}" for i in range(n)],
                "baseline"]  # fmt: skip
+    kind = _kind(job)
+    units: dict[str, tuple[str, str]] = {c: _unit(c, kind) for c in shown}
+    units.update({f"metric.{k}": _unit(k, kind) for k in metrics})
     rows = [
-        (p.index, *_pad(p.objectives, m),
+        (p.index, *_signed(_pad(p.objectives, m), flip),
          *[(per_point.get(p.index) or {}).get(k) for k in metrics], *_pad(p.x, n), None)
         for p in points
     ]  # fmt: skip
     for b in baselines:
         mark = BaselineMark.from_record(b, names)
-        rows.append((None, *_pad(mark.objectives, m), *[mark.metrics.get(k) for k in metrics],
-                     *[None] * n, b.name))  # fmt: skip
-    return _download(format, f"job-{job.id[:8]}-front", columns, rows)
+        rows.append((None, *_signed(_pad(mark.objectives, m), flip),
+                     *[mark.metrics.get(k) for k in metrics], *[None] * n, b.name))  # fmt: skip
+    return _download(format, f"job-{job.id[:8]}-front", columns, rows, units)
 
 
 def _pad(values: Any, n: int) -> list[Any]:
@@ -172,20 +208,30 @@ def export_history(
             after = chunk[-1].generation
     m = max((len(g.best) if isinstance(g.best, list) else 1 for g in rows), default=len(names))
     names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
+    shown, flip = _shown(names)
     several = m > 1
-    columns = ["generation", "n_evals", *[f"best_{n}" for n in names], "hypervolume",
+    columns = ["generation", "n_evals", *[f"best_{n}" for n in shown], "hypervolume",
                "wall_time_s"]  # fmt: skip
     if several:
-        columns += [f"front_min_{n}" for n in names] + [f"compromise_{n}" for n in names]
+        columns += [f"front_min_{n}" for n in shown] + [f"compromise_{n}" for n in shown]
+    kind = _kind(job)
+    units: dict[str, tuple[str, str]] = {"wall_time_s": ("s", "wall time of the generation")}
+    for n in shown:
+        unit, label = _unit(n, kind)
+        units[f"best_{n}"] = (unit, f"best {label} so far")
+        units[f"front_min_{n}"] = (unit, f"least {label} on the generation's front")
+        units[f"compromise_{n}"] = (unit, f"{label} of the reported compromise point")
 
     def data() -> Iterator[tuple[Any, ...]]:
         for g, c in zip(rows, conv, strict=True):
             reported = _pad(g.best if isinstance(g.best, list) else [g.best], m)
-            row = (g.generation, g.n_evals, *_pad(c.best_so_far, m), g.hypervolume,
-                   g.wall_time_s)  # fmt: skip
-            yield (*row, *_pad(c.front_min, m), *reported) if several else row
+            row = (g.generation, g.n_evals, *_signed(_pad(c.best_so_far, m), flip),
+                   g.hypervolume, g.wall_time_s)  # fmt: skip
+            if several:
+                row = (*row, *_signed(_pad(c.front_min, m), flip), *_signed(reported, flip))
+            yield row
 
-    return _download(format, f"job-{job.id[:8]}-history", columns, data())
+    return _download(format, f"job-{job.id[:8]}-history", columns, data(), units)
 
 
 @router.get(
@@ -200,15 +246,26 @@ def export_cells(
     """One row per cell: the swept values, job counts, then ``<column>_mean``, ``<column>_sd``
     and ``<column>_n`` of each objective, the hypervolume and each metric."""
     sweep, table = cell_table(ctx, key.id, sweep_id)
-    stats = [f"{c}_{s}" for c in table.stat_columns for s in ("mean", "sd", "n")]
+    shown, flip = _shown(list(table.stat_columns))
+    stats = [f"{c}_{s}" for c in shown for s in ("mean", "sd", "n")]
     columns = ["cell", *table.columns, "jobs", "succeeded", "seeds", *stats]
+    base = sweep.base_spec if isinstance(sweep.base_spec, dict) else {}
+    problem = base.get("problem")
+    kind = problem.get("kind") if isinstance(problem, dict) else None
+    kind = kind if isinstance(kind, str) else None
+    units: dict[str, tuple[str, str]] = {}
+    for q in shown:
+        unit, label = _unit(q, kind)
+        units[f"{q}_mean"] = (unit, f"mean of {label} over the cell's seeds")
+        units[f"{q}_sd"] = (unit, f"standard deviation of {label} over the cell's seeds")
+        units[f"{q}_n"] = ("", f"succeeded seeds with {label}")
     rows = []
     for c in table.cells:
         row: list[Any] = [c.index, *[c.values.get(p) for p in table.columns], len(c.job_ids),
                           c.counts.get("succeeded", 0), c.seeds]  # fmt: skip
-        for col in table.stat_columns:
+        for col, flipped in zip(table.stat_columns, flip, strict=True):
             samples = c.samples.get(col, [])
             mean, sd = mean_sd(samples)
-            row += [mean, sd, len(samples)]
+            row += [-mean if flipped and mean is not None else mean, sd, len(samples)]
         rows.append(row)
-    return _download(format, f"sweep-{sweep.id[:8]}-cells", columns, rows)
+    return _download(format, f"sweep-{sweep.id[:8]}-cells", columns, rows, units)

@@ -11,10 +11,11 @@ from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 
+from services.api.artifact_download import artifact_response
 from services.api.dashboard_schemas import FrontOut, MotionOut
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.front_view import front_out
-from services.api.lookups import owned_job
+from services.api.lookups import OwnedJob, owned_job
 from services.api.points import (
     baseline_recording,
     point_metrics,
@@ -24,7 +25,6 @@ from services.api.points import (
 from services.api.schemas import ErrorOut
 from services.store import output_queries as oq
 from services.store import repository as repo
-from services.store.errors import ArtifactError
 from services.store.records import JobRecord
 from services.store.tables import JobStatus
 
@@ -101,21 +101,25 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
     responses=_POINT_ERRORS,
 )
 async def get_motion(
-    job_id: str,
-    key: CurrentKey,
+    job: OwnedJob,
     ctx: Context,
     point: Annotated[int | None, Query(ge=0, le=10**9, description="Front point index.")] = None,
     baseline: Annotated[str | None, Query(max_length=200, description="Baseline name.")] = None,
+    trial: Annotated[
+        int | None, Query(ge=0, le=10**9, description="Stored trial (`GET .../trials`).")
+    ] = None,
 ) -> MotionOut:
     """The joint signals (q, qd, qdd, jerk, τ, power per joint, at most 400 samples), the
     cumulative energy, objectives and metrics of the front point ``point`` or the baseline
     ``baseline`` (neither: the reported optimum), decoded from its stored decision vector."""
-    with ctx.read() as session:
-        job = owned_job(session, job_id, key.id)
     _succeeded(job, "its motion")
-    payload = await run_in_threadpool(point_motion, ctx, job, point=point, baseline=baseline)
+    payload = await run_in_threadpool(
+        point_motion, ctx, job, point=point, baseline=baseline, trial=trial
+    )
     out = MotionOut(**payload)
-    if point is not None:
+    if trial is not None and point is None and baseline is None:
+        out.recording_url = f"{ctx.prefix}/jobs/{job.id}/trials/{trial}/recording"
+    elif point is not None:
         out.recording_url = f"{ctx.prefix}/jobs/{job.id}/pareto/{point}/recording"
     elif baseline is not None:
         out.recording_url = (
@@ -133,7 +137,7 @@ async def get_motion(
         **_POINT_ERRORS,
     },
 )
-async def get_point_recording(job_id: str, k: str, key: CurrentKey, ctx: Context) -> FileResponse:
+async def get_point_recording(job_id: str, k: str, key: CurrentKey, ctx: Context) -> Response:
     """The ``.rrd`` of the job's recording with front point ``k`` as its motion (the same
     baselines, history and fronts), decoded from the point's stored decision vector on the
     first request and kept as the job's artifact ``point-<k>``; checked against its SHA-256
@@ -147,20 +151,9 @@ async def get_point_recording(job_id: str, k: str, key: CurrentKey, ctx: Context
     return _rrd(ctx, job, artifact, f"point {k}", f"{job.id}-point-{int(k)}.rrd")
 
 
-def _rrd(ctx: ApiContext, job: JobRecord, artifact: Any, what: str, name: str) -> FileResponse:
-    store = ctx.artifacts
-    try:
-        store.verify(artifact.relative_path, artifact.sha256)
-        path = store.path(artifact.relative_path)
-    except FileNotFoundError:
-        raise ArtifactError(
-            f"the recording of {what} of job {job.id} is missing from the artifact store"
-        ) from None
-    return FileResponse(
-        path,
-        media_type="application/octet-stream",
-        filename=name,
-        headers={"X-Checksum-SHA256": artifact.sha256},
+def _rrd(ctx: ApiContext, job: JobRecord, artifact: Any, what: str, name: str) -> Response:
+    return artifact_response(
+        ctx, artifact, filename=name, what=f"the recording of {what} of job {job.id}"
     )
 
 
@@ -173,9 +166,7 @@ def _rrd(ctx: ApiContext, job: JobRecord, artifact: Any, what: str, name: str) -
         **_POINT_ERRORS,
     },
 )
-async def get_baseline_recording(
-    job_id: str, name: str, key: CurrentKey, ctx: Context
-) -> FileResponse:
+async def get_baseline_recording(job_id: str, name: str, key: CurrentKey, ctx: Context) -> Response:
     """The ``.rrd`` of the job's recording with the baseline ``name`` (a study's reference
     solution, as `GET /jobs/{id}/front` lists them) as its motion, decoded again on the first
     request and kept as a job artifact, like a front point's. Made whether or not the job

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import logging
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, HTTPException, Query, Response, status
 from fastapi.responses import FileResponse
 
+from services.api.artifact_download import artifact_response
 from services.api.convergence import convergence
 from services.api.deps import (
     MAX_OFFSET,
@@ -51,6 +53,7 @@ from services.store.specs import json_size
 from services.store.tables import JobStatus
 
 router = APIRouter(tags=["jobs"])
+log = logging.getLogger("legopt.api")
 
 _404: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such job (among yours)."}
@@ -201,18 +204,29 @@ def get_result(job_id: str, key: CurrentKey, ctx: Context) -> ResultOut:
     out = ResultOut.from_records(result, baselines, artifacts, job)
     summary = out.summary
     if isinstance(summary, dict) and "extras" not in summary:
-        out.summary = {**summary, "extras": _stored_extras(ctx, artifacts)}
+        extras, warning = _stored_extras(ctx, artifacts)
+        out.summary = {**summary, "extras": extras}
+        if warning is not None:
+            out.summary["extras_warning"] = warning
     return out
 
 
-def _stored_extras(ctx: ApiContext, artifacts: tuple[ArtifactRecord, ...]) -> Any:
-    """The study's extras from the job's ``result.json`` (the worker keeps them out of the
-    database row); ``{}`` for a job without that artifact."""
+def _stored_extras(
+    ctx: ApiContext, artifacts: tuple[ArtifactRecord, ...]
+) -> tuple[Any, str | None]:
+    """``(extras, warning)``: the study's extras from the job's ``result.json`` (the worker
+    keeps them out of the database row); ``{}`` for a job without that artifact, and ``{}``
+    with a warning saying why when it cannot be read (gone, store unreachable, corrupted): the
+    rest of the result is the database's."""
     art = next((a for a in artifacts if a.kind == "result"), None)
     if art is None:
-        return {}
-    doc = json.loads(ctx.artifacts.read(art.relative_path, art.sha256))
-    return doc.get("extras") or {}
+        return {}, None
+    try:
+        doc = json.loads(ctx.artifacts.read(art.relative_path, art.sha256))
+    except ArtifactError as exc:
+        log.warning("result extras of %s unavailable: %s", art.relative_path, exc)
+        return {}, f"the study's extras (in {art.relative_path}) are unavailable: {exc}"
+    return doc.get("extras") or {}, None
 
 
 @router.get(
@@ -280,9 +294,11 @@ def get_generations(
         **_404,
     },
 )
-def get_recording(job_id: str, key: CurrentKey, ctx: Context) -> FileResponse:
-    """The ``.rrd`` file, checked against its recorded SHA-256 first. Open it with
-    ``rerun FILE.rrd`` (or ``legopt replay JOB``)."""
+def get_recording(job_id: str, key: CurrentKey, ctx: Context) -> Response:
+    """The ``.rrd`` file, checked against its recorded SHA-256 first (``X-Checksum-SHA256``;
+    ``Range`` requests answered 206). Open it with ``rerun FILE.rrd`` (or ``legopt replay
+    JOB``). 404 naming it when its file or object is gone, 503 when the artifact store cannot
+    be reached."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         artifact = repo.get_artifact(session, job.id, RECORDING)
@@ -297,19 +313,8 @@ def get_recording(job_id: str, key: CurrentKey, ctx: Context) -> FileResponse:
             why = "; ".join(w for w in job.warnings if "record" in w) or "none was written"
             raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no recording: {why}")
         raise _no_output(job, "recording")
-    store = ctx.artifacts
-    try:
-        store.verify(artifact.relative_path, artifact.sha256)
-        path = store.path(artifact.relative_path)
-    except FileNotFoundError:
-        raise ArtifactError(
-            f"the recording of job {job.id} is missing from the artifact store"
-        ) from None
-    return FileResponse(
-        path,
-        media_type="application/octet-stream",
-        filename=f"{job.id}.rrd",
-        headers={"X-Checksum-SHA256": artifact.sha256},
+    return artifact_response(
+        ctx, artifact, filename=f"{job.id}.rrd", what=f"the recording of job {job.id}"
     )
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, JsonValue
 
 from legcore.robots import LeggedRobot, Robot, catalog
 from legcore.studies.registry import needs_text, plugin_errors, studies
@@ -30,22 +30,33 @@ router = APIRouter(tags=["studies"])
 MAX_STORED_ROBOTS = 100
 
 
+RobotOrigin = Literal["catalog", "stored"]
+
+
 class RobotFit(BaseModel):
     """Whether a study accepts one robot with its default task (the answer ``POST /jobs``
     gives: :mod:`services.api.study_fits`)."""
 
     robot: str = Field(description="Catalog name, or the stored robot's name.")
     id: str = Field(description="What a job spec's `robot` takes: the catalog name or the id.")
-    source: Literal["catalog", "stored"]
+    source: RobotOrigin
     accepted: bool
     field: str | None = Field(
-        default=None, description="What to change when refused: `robot` (a missing capability) "
-        "or the study parameter the pre-flight check names."
+        default=None,
+        description="What to change when refused: `robot` (a missing capability) "
+        "or the study parameter the pre-flight check names.",
     )
     reason: str | None = Field(
         description="Why the study refuses the robot (the missing capability, or why its default "
         "task cannot work on it and what to give instead)."
     )
+
+
+class OptimizerDefault(BaseModel):
+    """The optimiser a study runs when a job names none: its kind and the seed's settings."""
+
+    kind: str
+    params: dict[str, JsonValue] = Field(description="The optimiser's own parameters.")
 
 
 class StudyOut(BaseModel):
@@ -59,13 +70,15 @@ class StudyOut(BaseModel):
     robot_kinds: list[str] = Field(description="serial and/or legged")
     needs: list[str] = Field(description="What it needs from a robot: one line per alternative.")
     default_robot: str
-    default_optimizer: dict[str, Any]
+    default_optimizer: OptimizerDefault
     default_generations: int
-    params_schema: dict[str, Any] = Field(description="JSON Schema of the job's `problem`.")
-    defaults: dict[str, Any] = Field(description="`problem` with every default filled in.")
+    # A JSON Schema document and a document it describes: each study's own, so any JSON.
+    params_schema: dict[str, JsonValue] = Field(description="JSON Schema of the job's `problem`.")
+    defaults: dict[str, JsonValue] = Field(description="`problem` with every default filled in.")
     robot_relative: list[str] = Field(
-        default_factory=list, description="The parameters whose default is derived from the "
-        "robot a job runs on (null in `defaults`; each job's result says the value and the rule)."
+        default_factory=list,
+        description="The parameters whose default is derived from the "
+        "robot a job runs on (null in `defaults`; each job's result says the value and the rule).",
     )
     robots: list[RobotFit]
 
@@ -81,13 +94,20 @@ class StudiesOut(BaseModel):
     )
 
 
-def _fit(study: Study, name: str, ident: str, source: str, robot: Any) -> RobotFit:
+def _fit(study: Study, name: str, ident: str, source: RobotOrigin, robot: Any) -> RobotFit:
     if isinstance(robot, str):  # the robot could not be built
-        return RobotFit(robot=name, id=ident, source=source, accepted=False,  # type: ignore[arg-type]
-                        field="robot", reason=robot)
+        return RobotFit(
+            robot=name, id=ident, source=source, accepted=False, field="robot", reason=robot
+        )
     v = fit_of(robot, study.kind)
-    return RobotFit(robot=name, id=ident, source=source,  # type: ignore[arg-type]
-                    accepted=v.accepted, field=v.field, reason=v.reason)
+    return RobotFit(
+        robot=name,
+        id=ident,
+        source=source,
+        accepted=v.accepted,
+        field=v.field,
+        reason=v.reason,
+    )
 
 
 def _stored(spec: Any) -> Robot | LeggedRobot | str:
@@ -103,9 +123,7 @@ def _stored(spec: Any) -> Robot | LeggedRobot | str:
 def list_studies(
     key: CurrentKey,
     ctx: Context,
-    kind: Annotated[
-        str | None, Query(description="Only this study kind.", max_length=100)
-    ] = None,
+    kind: Annotated[str | None, Query(description="Only this study kind.", max_length=100)] = None,
     robots: Annotated[
         bool, Query(description="Check the catalog robots and yours against each kind.")
     ] = True,
@@ -115,10 +133,9 @@ def list_studies(
     accepted, with the reason when it is not."""
     known = studies()
     if kind is not None and kind not in known:
-        raise invalid(("query", "kind"), f"unknown study {kind!r}; expected one of "
-                                          f"{sorted(known)}")
+        raise invalid(("query", "kind"), f"unknown study {kind!r}; expected one of {sorted(known)}")
     chosen = [known[kind]] if kind is not None else list(known.values())
-    candidates: list[tuple[str, str, str, Any]] = []
+    candidates: list[tuple[str, str, RobotOrigin, Any]] = []
     checked = total = 0
     if robots:
         candidates = [(n, n, "catalog", catalog.get(n)) for n in catalog.names()]
@@ -138,7 +155,7 @@ def list_studies(
             robot_kinds=list(s.robot_kinds),
             needs=needs_text(s),
             default_robot=s.default_robot,
-            default_optimizer=s.default_optimizer,
+            default_optimizer=OptimizerDefault.model_validate(s.default_optimizer),
             default_generations=s.default_generations,
             params_schema=s.params.model_json_schema(),
             defaults=s.params.model_validate({}).model_dump(mode="json"),
@@ -147,5 +164,9 @@ def list_studies(
         )
         for s in chosen
     ]
-    return StudiesOut(items=items, stored_robots_checked=checked, stored_robots_total=total,
-                      plugin_errors=plugin_errors())
+    return StudiesOut(
+        items=items,
+        stored_robots_checked=checked,
+        stored_robots_total=total,
+        plugin_errors=plugin_errors(),
+    )

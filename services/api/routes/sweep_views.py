@@ -9,6 +9,7 @@ from fastapi import APIRouter, Query
 
 from services.api.dashboard_schemas import (
     CellFront,
+    CellFrontJob,
     CellStat,
     SweepCell,
     SweepCellsOut,
@@ -27,6 +28,8 @@ router = APIRouter(tags=["dashboard"])
 _404: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such sweep (among yours)."}
 }
+
+
 @router.get(
     "/sweeps/{sweep_id}/cells",
     response_model=SweepCellsOut,
@@ -99,7 +102,7 @@ def get_sweep_fronts(
     for i in chosen:
         c = by_index[i]
         jobs = [
-            {"job_id": j, "seed": s, "points": [p.objectives for p in fronts.get(j, [])]}
+            CellFrontJob(job_id=j, seed=s, points=[p.objectives for p in fronts.get(j, [])])
             for j, s in zip(c.job_ids, c.seeds, strict=True)
             if fronts.get(j)
         ]

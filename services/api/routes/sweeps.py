@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, cast
 
 from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.responses import FileResponse
@@ -10,10 +10,11 @@ from fastapi.responses import FileResponse
 from services.api.deps import Context, CurrentKey, IdPrefix, Pagination
 from services.api.errors import VALIDATION_ERROR_SCHEMA, invalid, not_found
 from services.api.lookups import robot_lookup
-from services.api.merged_recordings import merged_recording
+from services.api.merged_recordings import merged_recording, stored_members
 from services.api.schemas import (
     ErrorOut,
     Page,
+    SweepAxes,
     SweepCreate,
     SweepCreated,
     SweepOut,
@@ -247,7 +248,7 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
     return SweepOut(
         **summary.model_dump(),
         base=base,
-        axes=axes,
+        axes=cast(SweepAxes, axes),  # as stored: SweepOut validates it
         columns=columns,
         objective_names=names,
         table=Page[SweepRow](items=rows, total=total, limit=page.limit, offset=page.offset),
@@ -309,15 +310,11 @@ def get_sweep_recording(
             f"at most {MAX_MERGED_JOBS} jobs per merged recording, got {len(artifacts)}: "
             "choose them with ?jobs=…",
         )
-    store = ctx.artifacts
-    paths = []
-    for _, art in artifacts:
-        store.verify(art.relative_path, art.sha256)
-        paths.append(store.path(art.relative_path))
+    recordings = stored_members(ctx.artifacts, artifacts)  # verified (downloaded) when merged
     names = [f"{i + 1}_{job_id[:8]}" for i, (job_id, _) in enumerate(artifacts)]
     digests = [art.sha256 for _, art in artifacts]
     try:
-        out = merged_recording(paths, names, digests, ctx.settings.cache_dir)
+        out = merged_recording(recordings, names, digests, ctx.settings.cache_dir)
     except RuntimeError as exc:
         raise ArtifactError(
             f"the recordings of sweep {sweep.id} could not be merged ({exc}); download them "

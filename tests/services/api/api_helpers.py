@@ -112,6 +112,12 @@ def finish_like_a_worker(
                 best=[1.0 / (g + 1), 2.0],
                 wall_time_s=0.01,
             )
+    from services.store.evaluations import EvaluationsIn, record_evaluations
+
+    with ctx.write() as s:  # the trials: one generation of four evaluated solutions
+        X = [[0.1 * i, 0.2] for i in range(4)]
+        F = [[float(i), float(4 - i)] for i in range(4)]
+        record_evaluations(s, job_id, [EvaluationsIn(1, X, F, [0.0, 0.0, 0.5, 0.0])])  # type: ignore[arg-type]
     artifacts = []
     if recording is not None:
         stored = ctx.artifacts.put(job_id, "recording", recording)

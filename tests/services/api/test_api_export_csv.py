@@ -129,9 +129,9 @@ def test_the_job_list_front_and_history_exports_neutralise_formulas(
 
     rows = _rows(client.get(f"{API}/jobs/{ids[0]}/front/export?format=csv", headers=alice))
     header = rows[0]
-    assert header[:3] == ["index", "'-gain", "time"]  # the objectives' names are text too
+    assert header[:3] == ["index", "'-gain", "time [s]"]  # the objectives' names are text too
     points = [dict(zip(header, r, strict=True)) for r in rows[1:]]
-    assert [(p["index"], p["'-gain"], p["time"], p["x1"]) for p in points[:2]] == [
+    assert [(p["index"], p["'-gain"], p["time [s]"], p["x1"]) for p in points[:2]] == [
         ("0", "-2.5", "-2.0", "-0.1"), ("1", "-1.0", "-2.5", "-0.3"),
     ]  # fmt: skip
     assert points[-1]["baseline"] == "'" + HYPERLINK and points[-1]["'-gain"] == "-0.5"
@@ -140,7 +140,7 @@ def test_the_job_list_front_and_history_exports_neutralise_formulas(
     history = [dict(zip(rows[0], r, strict=True)) for r in rows[1:]]
     assert [h["compromise_-gain"] for h in history] == ["-1.5", "-2.5"]
     assert [h["best_-gain"] for h in history] == ["-1.5", "-2.5"]
-    assert history[0]["best_time"] == "-2.5" and history[0]["wall_time_s"] == "0.25"
+    assert history[0]["best_time [s]"] == "-2.5" and history[0]["wall_time_s [s]"] == "0.25"
 
 
 def test_the_cell_table_export_neutralises_swept_text(
@@ -160,7 +160,7 @@ def test_the_cell_table_export_neutralises_swept_text(
     assert all(c["seeds"] == "[1,2]" and c["succeeded"] == "2" for c in cells)
     assert rows[0][5:7] == ["'-gain_mean", "'-gain_sd"]  # header cells are text too
     assert {c["'-gain_mean"] for c in cells} == {"-2.5"}  # numbers stay numbers
-    assert {c["time_mean"] for c in cells} == {"-2.0"}
+    assert {c["time_mean [s]"] for c in cells} == {"-2.0"}
     # another key sees none of it
     bob = {"X-API-Key": new_key(ctx, "bob")[0]}
     assert client.get(f"{API}/sweeps/{sweep_id}/cells/export", headers=bob).status_code == 404

@@ -269,7 +269,7 @@ def test_lifecycle_read_back(client: TestClient, ctx: ApiContext, alice: dict[st
     assert rel["sha256"] in bad.json()["detail"]
     path.unlink()
     gone = client.get(f"{API}/jobs/{jid}/recording", headers=alice)
-    assert gone.status_code == 500 and "missing" in gone.json()["detail"]
+    assert gone.status_code == 404 and "missing" in gone.json()["detail"]  # never a 500
 
     r = client.post(f"{API}/jobs/{jid}/cancel", headers=alice)
     assert r.status_code == 409 and "succeeded" in r.json()["detail"]

@@ -182,7 +182,8 @@ def test_export_jobs_front_history_and_cells(stack: Stack, tmp_path: Path) -> No
     front = json.loads((tmp_path / "front.json").read_text())
     assert front["rows"], "an empty front"
     assert front["columns"][:3] == ["index", "time", "energy"]
-    assert all(isinstance(r["metric.energy"], float) for r in front["rows"])
+    assert all(isinstance(r["energy"], float) for r in front["rows"])
+    assert front["units"]["energy"] == "J" and front["units"]["time"] == "s"
     code, out = cli(stack, "export", "history", job_id[:8], "--format", "parquet",
                     "--out", str(tmp_path / "history.parquet"))  # fmt: skip
     assert code == 0, out
@@ -202,7 +203,7 @@ def test_export_jobs_front_history_and_cells(stack: Stack, tmp_path: Path) -> No
         cells = list(csv.DictReader(fh))
     assert [c["optimizer.params.pop_size"] for c in cells] == ["12", "16"]
     assert [(c["jobs"], c["succeeded"]) for c in cells] == [("2", "2"), ("2", "2")]
-    assert all(float(c["time_mean"]) > 0 and c["time_n"] == "2" for c in cells)
+    assert all(float(c["time_mean [s]"]) > 0 and c["time_n"] == "2" for c in cells)
     code, out = cli(stack, "export", "cells", sweep_id[:8], "--format", "parquet",
                     "--out", str(tmp_path / "cells.parquet"))  # fmt: skip
     assert code == 0, out

@@ -1,4 +1,5 @@
-"""Artifact store: atomic writes, checksums, path traversal rejected."""
+"""Artifact store on a local directory: atomic writes, checksums, path traversal rejected
+(the contract both backends share: ``test_artifacts_s3.py``)."""
 
 from __future__ import annotations
 
@@ -16,16 +17,17 @@ from services.store import (
     StoredFile,
     UnsafePathError,
 )
+from services.store.artifacts import LocalArtifactStore
 
 JOB = "0b6f4c1e-2a4d-4a8e-9d55-6f0c1f6b9a10"
 
 
 @pytest.fixture
-def store(tmp_path: Path) -> ArtifactStore:
-    return ArtifactStore(tmp_path / "artifacts")
+def store(tmp_path: Path) -> LocalArtifactStore:
+    return LocalArtifactStore(tmp_path / "artifacts")
 
 
-def test_put_bytes_file_and_stream(store: ArtifactStore, tmp_path: Path) -> None:
+def test_put_bytes_file_and_stream(store: LocalArtifactStore, tmp_path: Path) -> None:
     data = b"rerun recording" * 1000
     stored = store.put(JOB, "recording", data)
     assert stored == StoredFile(f"{JOB}/recording.rrd", hashlib.sha256(data).hexdigest(), 15000)
@@ -48,7 +50,7 @@ def test_put_bytes_file_and_stream(store: ArtifactStore, tmp_path: Path) -> None
     ]  # no temporary files left behind
 
 
-def test_replacing_is_atomic_and_failures_leave_no_partial_file(store: ArtifactStore) -> None:
+def test_replacing_is_atomic_and_failures_leave_no_partial_file(store: LocalArtifactStore) -> None:
     first = store.put(JOB, "recording", b"old")
     target = store.path(first.relative_path)
     inode = target.stat().st_ino
@@ -76,7 +78,7 @@ def test_replacing_is_atomic_and_failures_leave_no_partial_file(store: ArtifactS
     assert target.read_bytes() == b"new" and target.stat().st_ino != inode  # replaced
 
 
-def test_checksum_mismatch_is_detected(store: ArtifactStore) -> None:
+def test_checksum_mismatch_is_detected(store: LocalArtifactStore) -> None:
     stored = store.put(JOB, "recording", b"good bytes")
     store.path(stored.relative_path).write_bytes(b"evil bytes")
     with pytest.raises(ChecksumMismatchError):
@@ -101,7 +103,7 @@ def test_checksum_mismatch_is_detected(store: ArtifactStore) -> None:
         "a\\..\\b",
     ],
 )
-def test_traversal_is_rejected(store: ArtifactStore, rel: str) -> None:
+def test_traversal_is_rejected(store: LocalArtifactStore, rel: str) -> None:
     with pytest.raises(UnsafePathError):
         store.read(rel)
 
@@ -111,13 +113,13 @@ def test_traversal_is_rejected(store: ArtifactStore, rel: str) -> None:
     [("..", "recording", None), (JOB, "../x", None), ("a/b", "csv", None), (JOB, "csv", "/x")],
 )
 def test_bad_names_are_rejected(
-    store: ArtifactStore, job_id: str, kind: str, suffix: str | None
+    store: LocalArtifactStore, job_id: str, kind: str, suffix: str | None
 ) -> None:
     with pytest.raises(UnsafePathError):
         store.put(job_id, kind, b"x", suffix=suffix)
 
 
-def test_symlink_out_of_the_root_is_rejected(store: ArtifactStore, tmp_path: Path) -> None:
+def test_symlink_out_of_the_root_is_rejected(store: LocalArtifactStore, tmp_path: Path) -> None:
     outside = tmp_path / "secret.txt"
     outside.write_text("secret")
     (store.root / JOB).mkdir(parents=True)
@@ -126,7 +128,7 @@ def test_symlink_out_of_the_root_is_rejected(store: ArtifactStore, tmp_path: Pat
         store.read(f"{JOB}/link.txt")
 
 
-def test_delete_job_and_settings(store: ArtifactStore, tmp_path: Path) -> None:
+def test_delete_job_and_settings(store: LocalArtifactStore, tmp_path: Path) -> None:
     store.put(JOB, "recording", b"x")
     store.delete_job(JOB)
     assert not (store.root / JOB).exists()

@@ -140,3 +140,40 @@ export function idempotencyKey() {
   if (window.crypto && crypto.randomUUID) return crypto.randomUUID();
   return `${Date.now()}-${Math.random().toString(16).slice(2)}`;
 }
+
+/**
+ * Follow a Server-Sent Events stream of the API (fetched with the key, which EventSource
+ * cannot send): `onEvent(name, data)` per event; resolves when the stream ends (the server
+ * closed it, or `signal` aborted it); rejects when it cannot be opened or breaks.
+ * @param {string} path
+ * @param {(name: string, data: unknown) => void} onEvent
+ * @param {AbortSignal} signal
+ * @returns {Promise<void>}
+ */
+export async function follow(path, onEvent, signal) {
+  const res = await fetch(API + path, { headers: { "X-API-Key": getKey(), Accept: "text/event-stream" }, signal });
+  if (!res.ok || !res.body) throw new ApiError(res.status, res.statusText);
+  const reader = res.body.pipeThrough(new TextDecoderStream()).getReader();
+  let buffer = "";
+  for (;;) {
+    const { value, done } = await reader.read();
+    if (done) return;
+    buffer += value;
+    let cut;
+    while ((cut = buffer.indexOf("\n\n")) >= 0) {
+      const block = buffer.slice(0, cut);
+      buffer = buffer.slice(cut + 2);
+      let name = "message";
+      const data = [];
+      for (const line of block.split("\n")) {
+        if (line.startsWith("event:")) name = line.slice(6).trim();
+        else if (line.startsWith("data:")) data.push(line.slice(5).trimStart());
+      }
+      if (data.length) {
+        let parsed = null;
+        try { parsed = JSON.parse(data.join("\n")); } catch (_) { parsed = data.join("\n"); }
+        onEvent(name, parsed);
+      }
+    }
+  }
+}

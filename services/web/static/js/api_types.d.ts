@@ -2,7 +2,8 @@
 // edit (run that command to update it; tests/web/test_api_types_current.py checks it is current).
 // The responses of the endpoints the dashboard calls (services/web/api_types.py lists them)
 // and the schemas they use. A response holds every field of its model, so every property is
-// present; `unknown`: the API's schema says nothing of the value (Any).
+// present, but for a stored document (`x-optional-keys`) whose keys may be absent (`?`);
+// `unknown`: any JSON (JsonValue: a study's or an optimiser's own).
 
 /** A file stored with a job's result (``recording``: the Rerun ``.rrd``). */
 export interface ArtifactOut {
@@ -17,14 +18,15 @@ export interface BaselineMark {
   name: string;
   /** In the order of `objectives`. */
   objectives: Array<number | null>;
-  metrics: Record<string, unknown>;
+  /** Its scalar metrics by name (labelled in the front's `metrics`). */
+  metrics: Record<string, boolean | number | string>;
 }
 
 /** A baseline solution of the study (the seed paper's references) and its metrics. */
 export interface BaselineOut {
   name: string;
   /** The decoded solution as stored: {x, objectives, metrics, table, extra, feasible, violations}. */
-  metrics: unknown;
+  metrics: SolutionDoc;
   /**
    * Whether this baseline meets every constraint on the job's robot (null: not checked). A change
    * in % is computed against it only when it is feasible.
@@ -38,7 +40,15 @@ export interface BaselineOut {
 export interface CellFront {
   cell: number;
   label: string;
-  jobs: Array<Record<string, unknown>>;
+  jobs: CellFrontJob[];
+}
+
+/** One job of a cell and its final front. */
+export interface CellFrontJob {
+  job_id: string;
+  seed: number | null;
+  /** The front's objective vectors. */
+  points: Array<Array<number | null>>;
 }
 
 /** Mean and sample standard deviation over the jobs of a cell that have the value. */
@@ -60,6 +70,30 @@ export interface DashboardOptions {
   optimizers: Choice[];
   statuses: string[];
   sorts: string[];
+}
+
+/**
+ * One objective: the optimum, the initial population's best and the no-search solution,
+ * and what the optimiser earned over each in % (``legcore.earned``).
+ */
+export interface EarnedRow {
+  objective: string;
+  optimum: number | null;
+  initial?: number | null;
+  earned_pct?: number | null;
+  free?: number | null;
+  earned_over_free_pct?: number | null;
+  [key: string]: unknown;
+}
+
+/** Where the search started and what it earned (``legcore.earned.earned_summary``). */
+export interface EarnedStart {
+  objectives?: EarnedRow[];
+  optimum_cv?: number | null;
+  initial?: StartPoint | null;
+  free?: StartPoint | null;
+  verdict?: string;
+  [key: string]: unknown;
 }
 
 /** Everything the front plot and table of one job need. */
@@ -101,6 +135,18 @@ export interface FrontPointOut {
   metrics: Record<string, number | null> | null;
 }
 
+/** The gap as stored (``legcore.optimality_gap``; ``ResultOut.gap`` reads it). */
+export interface GapDoc {
+  objective?: string | null;
+  value?: number | null;
+  reference?: number | null;
+  kind?: string;
+  method?: string;
+  pct?: number | null;
+  reason?: string;
+  [key: string]: unknown;
+}
+
 /**
  * How far a single-objective optimum is from the best its problem allows (an exact
  * solution of the same problem, e.g. ``path_tracking``'s physical minimum by TOPP-RA), or
@@ -135,7 +181,7 @@ export interface GenerationOut {
    * the compromise (knee) point of the current front, which can get worse in any one objective —
    * see `best_so_far`.
    */
-  best: unknown;
+  best: number | Array<number | null> | null;
   /**
    * The least value of each objective found so far (minimised, as stored): the running minimum of
    * `front_min` over the generations up to this one (for one objective: `best`); null before the
@@ -161,6 +207,32 @@ export interface GenerationPage {
   next_after: number | null;
 }
 
+/** One generation of the optimiser's own history (``legcore`` ``GenerationRecord``). */
+export interface HistoryRow {
+  generation?: number;
+  n_evals?: number;
+  elapsed?: number | null;
+  best_f?: Array<number | null>;
+  best_cv?: number | null;
+  front_size?: number;
+  ideal?: Array<number | null>;
+  nadir?: Array<number | null>;
+  [key: string]: unknown;
+}
+
+/** How much each decision variable explains of each objective, over the stored trials. */
+export interface ImportanceOut {
+  job_id: string;
+  /** The estimator and how it was fitted. */
+  method: string;
+  /** Feasible trials the estimate is fitted on. */
+  trials: number;
+  variables: Quantity[];
+  objectives: Quantity[];
+  /** Per objective, per variable: its share (they sum to 1 per objective). */
+  importance: Array<number[]>;
+}
+
 /** A job with the spec it runs (robot references resolved). */
 export interface JobDetail {
   id: string;
@@ -174,8 +246,8 @@ export interface JobDetail {
   total_generations: number;
   /** generation / total_generations. */
   progress: number;
-  /** Best objective(s) so far. */
-  best_objective: unknown;
+  /** Best objective(s) so far: the latest generation's `best`. */
+  best_objective: number | Array<number | null> | null;
   /**
    * The verdict of a succeeded job: true when its reported optimum meets every constraint of the
    * study, false when it violates one (see `violations`); null until the job succeeds (and for
@@ -199,7 +271,7 @@ export interface JobDetail {
    * for jobs stored before it was kept.
    */
   facts: JobFacts | null;
-  spec: unknown;
+  spec: JobSpecOut;
 }
 
 /** What the job is, as its validation found it at submission (stored once). */
@@ -232,8 +304,8 @@ export interface JobOut {
   total_generations: number;
   /** generation / total_generations. */
   progress: number;
-  /** Best objective(s) so far. */
-  best_objective: unknown;
+  /** Best objective(s) so far: the latest generation's `best`. */
+  best_objective: number | Array<number | null> | null;
   /**
    * The verdict of a succeeded job: true when its reported optimum meets every constraint of the
    * study, false when it violates one (see `violations`); null until the job succeeds (and for
@@ -273,7 +345,12 @@ export interface JobRowOut {
   generation: number;
   total_generations: number;
   progress: number;
-  best_objective: unknown;
+  best_objective: number | Array<number | null> | null;
+  /**
+   * `best_objective` named, each value in its own sign and unit (a maximised quantity positive,
+   * under its own name); empty when the objectives are not known.
+   */
+  best_named: NamedValue[];
   /**
    * The verdict of a succeeded job: true when its reported optimum meets every constraint of the
    * study, false when it violates one (see `violations`); null until the job succeeds (and for
@@ -302,6 +379,106 @@ export interface JobRowPage {
   next_cursor: string | null;
 }
 
+/**
+ * A job spec as stored: the fields it was submitted with (`POST /jobs` takes it), a stored robot
+ * resolved (`robot`, when given, is a catalog name or an inline DH/URDF robot spec).
+ */
+export interface JobSpecOut {
+  name: string | null;
+  /**
+   * labels to find the job by (dashboard filter and search): up to 16, each 1-40 characters of
+   * letters, digits, '_', '-', '.', ':'
+   */
+  tags: string[];
+  robot: string | {
+    kind: "dh";
+    name: string;
+    convention: "standard" | "modified";
+    joints: Array<{
+      type: "revolute" | "prismatic";
+      name: string | null;
+      d: number;
+      a: number;
+      alpha: number;
+      offset: number;
+      q_min: number;
+      q_max: number;
+      qd_max: number;
+      qdd_max: number | null;
+      tau_max: number | null;
+      mass: number;
+      com: number[];
+      inertia: Array<number[]>;
+      motor: {
+        G: number;
+        Jm: number;
+        Kt: number | null;
+        Ke: number | null;
+        R: number | null;
+        B: number;
+        Tc_pos: number;
+        Tc_neg: number;
+      } | null;
+    }>;
+    base: Array<number[]> | null;
+    tool: Array<number[]> | null;
+    gravity: number[];
+    home: number[] | null;
+    ik: "puma560" | "leg3" | "leg2" | "arm5_down" | "dls" | null;
+    description: string;
+  } | {
+    kind: "urdf";
+    name: string;
+    urdf: string;
+    tool_frame: string | null;
+    locked_joints: Record<string, number | null>;
+    legs: Record<string, unknown> | "auto" | null;
+    leg: string | null;
+    motors: Record<string, {
+      G: number;
+      Jm: number;
+      Kt: number | null;
+      Ke: number | null;
+      R: number | null;
+      B: number;
+      Tc_pos: number;
+      Tc_neg: number;
+    }>;
+    qdd_max: Record<string, number>;
+    gravity: number[];
+    description: string;
+  } | null;
+  /**
+   * The study kind and its parameters: the fields of that kind's `params_schema` (`GET /studies`),
+   * each study's own.
+   */
+  problem: {
+    /** The study kind. */
+    kind: string;
+    [key: string]: unknown;
+  };
+  optimizer: {
+    kind: "ga" | "hka" | "moead" | "nsga2";
+    params: Record<string, unknown>;
+    refine: boolean;
+    refine_max_iter: number;
+  } | null;
+  seed: number;
+  /**
+   * When to stop: the first of the given limits (none given → the study's default
+   * generations). ``ftol``: stop when the best objective improved by less than ``ftol`` over the
+   * last ``window`` generations (seed 001's stall rule).
+   */
+  budget: {
+    generations: number | null;
+    evaluations: number | null;
+    wall_time_s: number | null;
+    ftol: number | null;
+    window: number;
+  };
+  record: boolean;
+}
+
 /** Lifecycle of a job: queued -> running -> succeeded | failed | cancelled. */
 export type JobStatus = "queued" | "running" | "succeeded" | "failed" | "cancelled";
 
@@ -317,6 +494,8 @@ export interface JointOut {
   effort: number | null;
   link_mass_kg: number | null;
 }
+
+export type JsonValue = unknown;
 
 /**
  * An API key (never its secret): role, validity and its own quota limits (null: the
@@ -337,10 +516,20 @@ export interface KeyOut {
 /** What an API key may do: ``user`` (its own resources) or ``admin`` (also manage keys). */
 export type KeyRole = "user" | "admin";
 
+/** The front of the last generation stored so far (objective vectors only). */
+export interface LiveFrontOut {
+  job_id: string;
+  /** The generation the front is of (null: none). */
+  generation: number | null;
+  objectives: Quantity[];
+  /** Objective vectors (minimised form). */
+  points: Array<Array<number | null>>;
+}
+
 /** One solution decoded again: which one, its objectives and metrics, its joint signals. */
 export interface MotionOut {
   job_id: string;
-  /** point | baseline | best */
+  /** point | baseline | trial | best */
   source: string;
   index: number | null;
   name: string | null;
@@ -364,6 +553,43 @@ export interface MotionSignal {
   label: string;
   unit: string;
   values: Array<Array<number | null>>;
+}
+
+/** A quantity's value in its own sign, with its name and SI unit. */
+export interface NamedValue {
+  /** Its key (a maximised quantity under its own name). */
+  name: string;
+  label: string;
+  /** SI unit ('' when dimensionless). */
+  unit: string;
+  value: number | null;
+}
+
+/**
+ * The objectives of a result's optimum: their names (minimised, in the front's column
+ * order) and the optimum's value of each, as the study states it.
+ */
+export interface ObjectivesDoc {
+  names: string[];
+  values: Record<string, number | null>;
+  [key: string]: unknown;
+}
+
+/**
+ * What the optimiser did: its kind and parameters, generations, evaluations, wall time,
+ * why it stopped, whether its optimum is feasible, and the refinement when asked for.
+ */
+export interface OptimizerRun {
+  kind?: string;
+  /** The optimiser's own parameters (its kind's; any JSON). */
+  params?: Record<string, JsonValue>;
+  n_gen?: number;
+  n_evals?: number;
+  elapsed_s?: number | null;
+  reason?: string;
+  feasible?: boolean;
+  refine?: RefineDoc;
+  [key: string]: unknown;
 }
 
 export interface Page_RobotOut {
@@ -428,6 +654,25 @@ export interface Quantity {
   sense: string;
 }
 
+/**
+ * The local refinement of the optimum (``optimizer.refine`` of a spec;
+ * ``legcore.optimizers.refine.RefineResult.summary``).
+ */
+export interface RefineDoc {
+  before?: number | null;
+  after?: number | null;
+  cv_before?: number | null;
+  cv_after?: number | null;
+  relaxed?: number | null;
+  n_evals?: number;
+  elapsed_s?: number | null;
+  success?: boolean;
+  improved?: boolean;
+  skipped?: boolean;
+  message?: string;
+  [key: string]: unknown;
+}
+
 /** The final result of a succeeded job, with its verdict and the task it ran. */
 export interface ResultOut {
   job_id: string;
@@ -455,16 +700,41 @@ export interface ResultOut {
    * Objectives of the best solution as stored by the worker: {"names": [...], "values": {name:
    * value}}.
    */
-  objectives: unknown;
+  objectives: ObjectivesDoc | null;
   /** Decision vector of the best solution. */
-  best_x: unknown;
+  best_x: Array<number | null> | null;
   /** Key metrics of the best solution (energy J, ...). */
-  metrics: unknown;
+  metrics: Record<string, number | null> | null;
   /** Per-joint table, study extras, optimizer info, history. */
-  summary: unknown;
+  summary: ResultSummary | null;
   baselines: BaselineOut[];
   artifacts: ArtifactOut[];
   created_at: string;
+}
+
+/**
+ * The rest of a result: the optimum's per-joint table and extra outputs, the study's
+ * extras, the optimiser's run, what it earned (``start``), its history, the task, the gap
+ * and the optimum's place on the front (null when not on it, e.g. refined).
+ */
+export interface ResultSummary {
+  table?: TableRow[];
+  /** The study's own outputs of this solution (servo table, workspace, ...): any JSON. */
+  extra?: Record<string, JsonValue>;
+  optimizer?: OptimizerRun;
+  start?: EarnedStart | null;
+  history?: HistoryRow[];
+  task?: TaskDoc | null;
+  gap?: GapDoc | null;
+  best_index?: number | null;
+  /**
+   * The study's outputs computed from the final front (workspaces, masks, the hexapod's
+   * stable/unstable split): any JSON, the study's own.
+   */
+  extras?: Record<string, JsonValue>;
+  /** Why `extras` is empty: the file holding them is unavailable. */
+  extras_warning?: string;
+  [key: string]: unknown;
 }
 
 /** A robot in a listing. Catalog entries have ``builtin`` true and their name as id. */
@@ -491,6 +761,30 @@ export interface RobotView {
 }
 
 /**
+ * A decoded solution as stored (``legcore`` ``Solution.summary``): decision vector,
+ * objectives, metrics (SI, flags as 0/1), per-joint table, the study's extra outputs, and,
+ * when it was checked, whether it is feasible and what it violates.
+ */
+export interface SolutionDoc {
+  x?: Array<number | null> | null;
+  objectives?: Record<string, number | null>;
+  metrics?: Record<string, number | null>;
+  table?: TableRow[];
+  /** The study's own outputs of this solution (servo table, workspace, ...): any JSON. */
+  extra?: Record<string, JsonValue>;
+  feasible?: boolean;
+  violations?: ViolationDoc[];
+  [key: string]: unknown;
+}
+
+/** A start the optimum is compared with: what it is, and its constraint violation. */
+export interface StartPoint {
+  what: string;
+  cv: number | null;
+  [key: string]: unknown;
+}
+
+/**
  * Whether a study kind accepts the robot with its default task, and why not (what to
  * change: ``field``); when it does, the rules its default task was derived by.
  */
@@ -504,13 +798,29 @@ export interface StudyFit {
   preset: string | null;
 }
 
+/** What a sweep was fanned out over, as ``POST /sweeps`` received it. */
+export interface SweepAxes {
+  /** path -> values */
+  grid?: Record<string, JsonValue[]>;
+  /** Explicit override sets (path -> value). */
+  list?: Array<Record<string, JsonValue>>;
+  seeds?: number[];
+  /** Jobs the sweep expanded to. */
+  n_jobs?: number;
+  [key: string]: unknown;
+}
+
 /** One cell of a sweep's grid: the jobs sharing every swept value but the seed. */
 export interface SweepCell {
   index: number;
-  /** The swept values (seed excluded). */
-  values: Record<string, unknown>;
+  /**
+   * The swept values (seed excluded): whatever JSON the spec takes at each path (a number, a name,
+   * a list, a robot's name).
+   */
+  values: Record<string, JsonValue>;
   job_ids: string[];
-  seeds: unknown[];
+  /** Each job's seed (null: none set). */
+  seeds: Array<number | null>;
   counts: Record<string, number>;
   /** Column name -> mean ± sd. */
   stats: Record<string, CellStat>;
@@ -546,8 +856,10 @@ export interface SweepOut {
   n_jobs: number;
   state: "empty" | "queued" | "running" | "finished";
   counts: Partial<Record<JobStatus, number>>;
-  base: unknown;
-  axes: unknown;
+  /** The base spec (robot references resolved). */
+  base: JobSpecOut;
+  /** What the base was fanned out over. */
+  axes: SweepAxes;
   /** The swept paths (keys of each row's overrides). */
   columns: string[];
   objective_names: string[];
@@ -559,13 +871,13 @@ export interface SweepRow {
   job_id: string;
   status: JobStatus;
   /** Value of every swept path in this job. */
-  overrides: Record<string, unknown>;
+  overrides: Record<string, JsonValue>;
   progress: number;
-  best_objective: unknown;
+  best_objective: number | Array<number | null> | null;
   /** Final objectives (succeeded jobs). */
-  objectives: unknown;
+  objectives: Record<string, number | null> | null;
   /** Final key metrics (succeeded jobs). */
-  metrics: unknown;
+  metrics: Record<string, number | null> | null;
   /**
    * The verdict of a succeeded job: true when its reported optimum meets every constraint of the
    * study, false when it violates one (see `violations`); null until the job succeeds (and for
@@ -586,12 +898,37 @@ export interface SweepSummary {
 }
 
 /**
+ * One row of a solution's per-joint table (``legcore`` ``Solution.table``): a value per
+ * joint (``values``) or one for the whole robot (``total``).
+ */
+export interface TableRow {
+  metric: string;
+  key?: string;
+  unit?: string;
+  values?: Array<number | null>;
+  total?: number | null;
+  [key: string]: unknown;
+}
+
+/** The task as stored (``legcore`` ``Task.as_dict``; ``ResultOut.task`` reads it). */
+export interface TaskDoc {
+  /** The study's parameters (`GET /studies`: `params_schema` of its kind). */
+  params?: Record<string, JsonValue>;
+  rules?: Record<string, string>;
+  preset?: string | null;
+  [key: string]: unknown;
+}
+
+/**
  * The task a job ran: the study's parameters with every robot-relative default filled in
  * for its robot, and the rule that gave each derived value.
  */
 export interface TaskOut {
-  /** The study parameters the job ran with. */
-  params: Record<string, unknown>;
+  /**
+   * The study parameters the job ran with (the fields of its kind's `params_schema` in `GET
+   * /studies`: any JSON, each study's own).
+   */
+  params: Record<string, JsonValue>;
   /**
    * Parameter -> the rule (words with numbers) that derived its value from the robot; the values
    * the user gave and the preset's have none.
@@ -599,6 +936,73 @@ export interface TaskOut {
   rules: Record<string, string>;
   /** The paper whose settings filled the unset fields, if any. */
   preset: string | null;
+}
+
+/**
+ * Columns of (a sample of) the matched trials, for a parallel-coordinates plot: one value
+ * list per variable and objective, in ``trial`` order.
+ */
+export interface TrialColumns {
+  job_id: string;
+  objectives: Quantity[];
+  variables: Quantity[];
+  /** Evaluations stored for the job. */
+  stored: number;
+  /**
+   * At most this many are stored per job (plus its last generation's): beyond it, every stride-th
+   * generation is kept.
+   */
+  bound: number;
+  /** The generations stored, ascending. */
+  generations: number[];
+  matched: number;
+  trial: number[];
+  feasible: boolean[];
+  /** Per variable, its values. */
+  x_values: Array<Array<number | null>>;
+  /** Per objective, its values (as the front holds them). */
+  objective_values: Array<Array<number | null>>;
+}
+
+/** One evaluated solution. */
+export interface TrialOut {
+  /**
+   * Its number among the job's stored evaluations (0-based, generation order); the id to ask its
+   * motion or recording by.
+   */
+  trial: number;
+  /** The generation that evaluated it (1 = initial). */
+  generation: number;
+  /** Decision variables, as `variables` name them. */
+  x: Array<number | null>;
+  /** Objectives as the front holds them (minimised), as `objectives` name them. */
+  objectives: Array<number | null>;
+  /** Total constraint violation (0 = feasible). */
+  cv: number;
+  feasible: boolean;
+}
+
+/** A page of a job's trials, filtered and sorted. */
+export interface TrialPage {
+  job_id: string;
+  objectives: Quantity[];
+  variables: Quantity[];
+  /** Evaluations stored for the job. */
+  stored: number;
+  /**
+   * At most this many are stored per job (plus its last generation's): beyond it, every stride-th
+   * generation is kept.
+   */
+  bound: number;
+  /** The generations stored, ascending. */
+  generations: number[];
+  /** Trials that pass the filters. */
+  matched: number;
+  offset: number;
+  limit: number;
+  sort: string;
+  descending: boolean;
+  items: TrialOut[];
 }
 
 /** What your key uses now, and its limits. */
@@ -612,6 +1016,15 @@ export interface UsageOut {
   /** Artifacts plus stored specs, bytes. */
   stored_bytes: number;
   max_storage_bytes: number;
+}
+
+/** A violated constraint as stored with a solution (``legcore`` ``Violation.as_dict``). */
+export interface ViolationDoc {
+  constraint?: string;
+  amount?: number | null;
+  unit?: string;
+  text?: string;
+  [key: string]: unknown;
 }
 
 /** One constraint a solution violates, and by how much (``legcore.studies.task.Violation``). */
@@ -642,6 +1055,10 @@ export interface Endpoints {
   "GET /jobs/{job_id}/front": FrontOut;
   "GET /jobs/{job_id}/result": ResultOut;
   "GET /jobs/{job_id}/motion": MotionOut;
+  "GET /jobs/{job_id}/front/live": LiveFrontOut;
+  "GET /jobs/{job_id}/trials": TrialPage;
+  "GET /jobs/{job_id}/trials/columns": TrialColumns;
+  "GET /jobs/{job_id}/trials/importance": ImportanceOut;
   "GET /robots": Page_RobotOut;
   "GET /sweeps": Page_SweepSummary;
   "GET /sweeps/{sweep_id}": SweepOut;

@@ -9,8 +9,10 @@ import { axis } from "./ui.js";
 /** @typedef {import("./api_types").Quantity} Quantity */
 /** @typedef {import("./api_types").SweepFrontsOut} SweepFrontsOut */
 /**
- * A solution picked on the front plot (or in the front table): a point or a baseline.
- * @typedef {{ kind: "point", index: number } | { kind: "baseline", name: string }} Selection
+ * A solution picked on the front plot, in the front table or among the trials: a point, a
+ * baseline or a stored trial.
+ * @typedef {{ kind: "point", index: number } | { kind: "baseline", name: string }
+ *   | { kind: "trial", index: number }} Selection
  */
 /**
  * One job of a sweep cell's fronts (GET /sweeps/{id}/fronts: `cells[].jobs[]`, which the
@@ -33,24 +35,48 @@ const LAYOUT = { margin: { l: 64, r: 16, t: 30, b: 50 }, hovermode: "closest",
 export function purge(el) { if (el && el.data) Plotly.purge(el); }
 
 /**
+ * Which objectives a front plot shows and whether its baselines may widen the axes.
+ * @typedef {{ axes?: number[] | null, fitBaselines?: boolean }} FrontView
+ */
+
+/**
+ * The range [lo, hi] of `values` padded by 6 % (null without a finite value).
+ * @param {Array<number | null>} values
+ * @returns {[number, number] | null}
+ */
+function padded(values) {
+  const v = /** @type {number[]} */ (values.filter((x) => x !== null && Number.isFinite(x)));
+  if (!v.length) return null;
+  const lo = Math.min(...v), hi = Math.max(...v);
+  const pad = (hi - lo) * 0.06 || Math.abs(hi) * 0.06 || 1;
+  return [lo - pad, hi + pad];
+}
+
+/**
  * The front of `front` (GET /jobs/{id}/front) into `el`; `onPick({kind, index|name})`.
+ * `view.axes`: the objectives to plot (2 or 3 indices; default the first 2 or 3);
+ * `view.fitBaselines`: let the baselines and the paper's values widen the axes (default: the
+ * axes fit the front, and marks outside it are off the plot).
  * @param {HTMLElement} el
  * @param {FrontOut} front
  * @param {(sel: Selection) => void} onPick called with the point or baseline clicked
  * @param {Selection | null} [selected] the one to ring
+ * @param {FrontView} [view]
  */
-export function frontPlot(el, front, onPick, selected = null) {
+export function frontPlot(el, front, onPick, selected = null, view = {}) {
   const m = front.objectives.length;
+  const ax = view.axes && view.axes.length >= 2 ? view.axes : m >= 3 ? [0, 1, 2] : m === 2 ? [0, 1] : [0];
   const pts = front.points;
   /** @param {number} j */
   const col = (j) => pts.map((p) => p.objectives[j]);
   const text = pts.map((p) => `point ${p.index}`);
   /** @type {PlotSpec[]} */
   const traces = [];
-  const three = m >= 3;
+  const three = ax.length >= 3;
   const base = three ? { type: "scatter3d" } : { type: "scatter" };
   /** @param {(j: number) => unknown[]} get the values of objective j */
-  const xyz = (get) => (three ? { x: get(0), y: get(1), z: get(2) } : { x: get(0), y: m > 1 ? get(1) : get(0).map(() => 0) });
+  const xyz = (get) => (three ? { x: get(ax[0]), y: get(ax[1]), z: get(ax[2]) }
+    : { x: get(ax[0]), y: ax.length > 1 ? get(ax[1]) : get(ax[0]).map(() => 0) });
   traces.push({ ...base, ...xyz(col), mode: "markers", name: "front", text,
     customdata: pts.map((p) => ["point", p.index]),
     marker: { size: three ? 4 : 8, color: COLORS[0], opacity: 0.85 } });
@@ -63,7 +89,7 @@ export function frontPlot(el, front, onPick, selected = null) {
           line: { color: "#333", width: 1 } } });
     }
   }
-  const marks = front.baselines.filter((b) => b.objectives.slice(0, Math.max(1, Math.min(m, 3))).every((v) => v !== null));
+  const marks = front.baselines.filter((b) => ax.every((j) => b.objectives[j] !== null && b.objectives[j] !== undefined));
   if (marks.length) {
     traces.push({ ...base, ...xyz((j) => marks.map((b) => b.objectives[j])), mode: three ? "markers" : "markers+text",
       name: "baselines (study reference)", text: marks.map((b) => b.name), textposition: "top center",
@@ -86,10 +112,16 @@ export function frontPlot(el, front, onPick, selected = null) {
     }
   }
   const o = front.objectives;
+  // the axes fit the front unless asked to fit the baselines too (or there is no front)
+  const fit = !view.fitBaselines && pts.length > 1;
+  /** @param {number} i the plot axis (0 x, 1 y, 2 z) */
+  const axisSpec = (i) => {
+    const r = fit && ax[i] !== undefined ? padded(col(ax[i])) : null;
+    return { title: { text: ax[i] !== undefined ? axis(o[ax[i]]) : "" }, ...(r ? { range: r, autorange: false } : {}) };
+  };
   const layout = three
-    ? { ...LAYOUT, scene: { xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: axis(o[1]) } },
-        zaxis: { title: { text: axis(o[2]) } } }, margin: { l: 0, r: 0, t: 20, b: 0 } }
-    : { ...LAYOUT, xaxis: { title: { text: axis(o[0]) } }, yaxis: { title: { text: m > 1 ? axis(o[1]) : "" } } };
+    ? { ...LAYOUT, scene: { xaxis: axisSpec(0), yaxis: axisSpec(1), zaxis: axisSpec(2) }, margin: { l: 0, r: 0, t: 20, b: 0 } }
+    : { ...LAYOUT, xaxis: axisSpec(0), yaxis: ax.length > 1 ? axisSpec(1) : { title: { text: "" } } };
   Plotly.react(el, traces, layout, CONFIG);
   const plot = /** @type {PlotlyHTMLElement} */ (el);
   plot.removeAllListeners && plot.removeAllListeners("plotly_click");

@@ -5,30 +5,30 @@
 // verdict first: red with each violated constraint and by how much when the reported optimum
 // is infeasible, green when it meets every constraint; and the task it ran (the rule that
 // derived each robot-relative parameter from its robot).
-import { api, download } from "../api.js";
-import { convergencePlot, frontPlot, jointPlot, purge } from "../plots.js";
+import { api, download, follow } from "../api.js";
+import { convergencePlot, jointPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
 import { bar, best, clear, errorText, fill, h, jobBadge, num, shortId, TERMINAL, violationText, when } from "../ui.js";
 import { rerun } from "./jobs.js";
+import { frontSteering } from "./job_front.js";
+import { trialsCard } from "./job_trials.js";
 
+/** @typedef {import("../api_types").EarnedStart} EarnedStart */
 /** @typedef {import("../api_types").FrontOut} FrontOut */
 /** @typedef {import("../api_types").GapOut} GapOut */
 /** @typedef {import("../api_types").GenerationOut} GenerationOut */
 /** @typedef {import("../api_types").GenerationPage} GenerationPage */
 /** @typedef {import("../api_types").JobDetail} JobDetail */
+/** @typedef {import("../api_types").LiveFrontOut} LiveFrontOut */
 /** @typedef {import("../api_types").MotionOut} MotionOut */
 /** @typedef {import("../api_types").Quantity} Quantity */
 /** @typedef {import("../api_types").ResultOut} ResultOut */
 /** @typedef {import("../api_types").TaskOut} TaskOut */
 /** @typedef {import("../plots.js").Selection} Selection */
-/**
- * What the optimiser earned (a result's `summary.start`, legcore/earned.py; the API's schema
- * leaves `summary` untyped).
- * @typedef {{ objectives?: Array<{ objective: string, optimum: number, initial?: number, free?: number,
- *   earned_pct?: number | null }>, verdict?: string, free?: { what: string } | null }} EarnedStart
- */
 
 const POLL_MS = 1500;
+// While the server pushes the job's progress (GET /jobs/{id}/events), a slow poll only in case.
+const SAFETY_POLL_MS = 15000;
 // How often the page asks again for a front whose points' metrics are still being computed.
 const METRICS_RETRY_MS = 3000;
 
@@ -47,11 +47,16 @@ export async function render(main, jobId) {
   const progress = h("div.card");
   const conv = h("div.plot.small#convergence");
   const frontEl = h("div.plot#front-plot");
+  const frontControls = h("div.toolbar#front-controls");
   const frontTable = h("table#front-table");
   const motionCard = h("div.card#motion");
   const viewer = new Viewer();
   const metrics = h("div.card#metrics");
   const spec = h("div.card");
+  const trials = trialsCard(jobId, (t) => pick({ kind: "trial", index: t }));
+  const steer = frontSteering(frontControls, frontEl, (sel) => pick(sel));
+  /** @type {JobDetail | null} */
+  let current = null;
   /** @type {HTMLElement[]} */
   const plots = [conv, frontEl];
   /** @type {FrontOut | null} */
@@ -69,7 +74,7 @@ export async function render(main, jobId) {
   main.append(head, verdict, progress,
     h("div.row",
       h("div.card.grow", h("h2", "Convergence"), conv),
-      h("div.card.grow", h("h2", "Pareto front"), h("p.muted", "Click a point, a row or a baseline to see its motion."), frontEl)),
+      h("div.card.grow", h("h2", "Pareto front"), h("p.muted", "Click a point, a row or a baseline to see its motion."), frontControls, frontEl)),
     h("div.card", h("div.toolbar", h("h2", "Front points"), h("span.spacer"),
       ...["csv", "parquet", "json"].map((f) => h("button.secondary", { dataset: { export: `front-${f}` },
         on: { click: () => download(`/jobs/${jobId}/front/export?format=${f}`, `front.${f}`) } }, `front ${f.toUpperCase()}`)),
@@ -77,13 +82,47 @@ export async function render(main, jobId) {
         on: { click: () => download(`/jobs/${jobId}/history/export?format=${f}`, `history.${f}`) } }, `history ${f.toUpperCase()}`))),
       h("div.scroll", frontTable)),
     h("div.row", h("div.grow", motionCard), h("div.card.grow", h("h2", "Rerun recording"), viewer.el)),
-    metrics, spec);
+    trials.el, metrics, spec);
+
+  // Live: the server pushes an event when the job's generation or status changes; the page
+  // redraws then. Where the stream cannot be opened (or breaks), the page polls.
+  let streaming = false;
+  let streamFailed = false;
+  const stream = new AbortController();
+  let refreshing = false;
+  let again = false;
+
+  function startStream() {
+    if (streaming || streamFailed || !alive) return;
+    streaming = true;
+    follow(`/jobs/${jobId}/events`, (name) => { if (name === "progress") refreshSoon(); }, stream.signal)
+      .then(() => { streaming = false; if (alive && current && !TERMINAL.has(current.status)) startStream(); })
+      .catch(() => { streaming = false; streamFailed = true; if (alive) refreshSoon(); });
+  }
+
+  // One refresh at a time; events that arrive meanwhile make one more.
+  function refreshSoon() {
+    if (refreshing) { again = true; return; }
+    refreshing = true;
+    refresh().catch(() => {}).finally(() => {
+      refreshing = false;
+      if (again && alive) { again = false; refreshSoon(); }
+    });
+  }
+
+  // The running job's current front (objective vectors of its last stored generation).
+  async function drawLiveFront() {
+    /** @type {LiveFrontOut} */
+    const live = await api(`/jobs/${jobId}/front/live`);
+    if (alive && !front) steer.drawLive(live);
+  }
 
   async function refresh() {
     clearTimeout(timer);
     /** @type {JobDetail} */
     const job = await api(`/jobs/${jobId}`);
     if (!alive) return;
+    current = job;
     drawHead(job);
     drawVerdict(job);
     drawProgress(job);
@@ -92,10 +131,14 @@ export async function render(main, jobId) {
     generations = generations.concat(page.items);
     if (page.items.length) lastGen = page.next_after;
     if (generations.length) convergencePlot(conv, generations, front ? front.objectives : objectivesOf(generations));
+    if (page.items.length || !TERMINAL.has(job.status) || lastGen === null) await trials.refresh();
     if (TERMINAL.has(job.status)) {
+      stream.abort();
       if (job.status === "succeeded" && !front) await loadResult(job);
     } else {
-      timer = setTimeout(() => refresh().catch(() => {}), POLL_MS);
+      await drawLiveFront().catch(() => {});
+      startStream();
+      timer = setTimeout(() => refreshSoon(), streaming ? SAFETY_POLL_MS : POLL_MS);
     }
   }
 
@@ -200,7 +243,7 @@ export async function render(main, jobId) {
     front = f;
     if ((result.task || result.gap) && verdictJob) drawVerdict(verdictJob, result.task, result.gap);
     if (generations.length) convergencePlot(conv, generations, front.objectives);
-    frontPlot(frontEl, front, pick);
+    drawFront();
     drawFrontTable(front);
     drawMetrics(front, result);
     if (front.point_metrics === "pending") metricsTimer = setTimeout(() => reloadPointMetrics(job).catch(() => {}), METRICS_RETRY_MS);
@@ -223,6 +266,8 @@ export async function render(main, jobId) {
     drawFrontTable(front);
     markSelected();
   }
+
+  function drawFront() { if (front) steer.draw(front, selected); }
 
   /** @param {FrontOut} front */
   function drawFrontTable(front) {
@@ -269,6 +314,7 @@ export async function render(main, jobId) {
     for (const tr of frontTable.querySelectorAll("tr.selected")) tr.classList.remove("selected");
     const sel = selected;
     if (!sel) return null;
+    if (sel.kind === "trial") return null;
     const row = sel.kind === "point" ? frontTable.querySelector(`tr[data-point="${sel.index}"]`)
       : frontTable.querySelector(`tr[data-baseline="${CSS.escape(sel.name)}"]`);
     if (row) row.classList.add("selected");
@@ -289,7 +335,7 @@ export async function render(main, jobId) {
       const text = `${pv.start === null ? "" : `${num(pv.start)} → `}${num(pv.optimum)}`;
       return h("td.num", { title: [pv.symbol && `paper: ${pv.symbol}`, pv.note].filter(Boolean).join(" — ") }, text);
     };
-    const rows = Object.entries(/** @type {Record<string, unknown>} */ (result.metrics) || {}).map(([k, v]) => {
+    const rows = Object.entries(result.metrics || {}).map(([k, v]) => {
       const q = labels[k] || { label: k, unit: "" };
       return h("tr", h("td", q.label), h("td.mono.muted", k), h("td.num", num(v)), h("td", q.unit),
         paper ? paperCell(k) : null, front.baselines.map((b) => h("td.num", num(b.metrics[k]))));
@@ -317,8 +363,8 @@ export async function render(main, jobId) {
   // gives with no search (summary.start, legcore/earned.py) beside the optimum.
   /** @param {ResultOut} result */
   function earnedBlock(result) {
-    /** @type {EarnedStart | undefined} */
-    const st = (/** @type {{ start?: EarnedStart } | null} */ (result.summary) || {}).start;
+    /** @type {EarnedStart | null | undefined} */
+    const st = result.summary?.start;
     if (!st || !st.objectives) return null;
     const rows = st.objectives.map((r) => h("tr", h("td.mono", r.objective), h("td.num", num(r.initial)),
       h("td.num", num(r.free)), h("td.num", num(r.optimum)), h("td.num", r.earned_pct == null ? "" : `${num(r.earned_pct)} %`)));
@@ -330,20 +376,22 @@ export async function render(main, jobId) {
 
   /** @param {Selection} sel */
   async function pick(sel) {
-    if (!front) return;
+    if (!front && !(sel.kind === "trial" && current && current.status === "succeeded")) return;
     selected = sel;
     const row = markSelected();
     if (row) row.scrollIntoView({ block: "nearest" });
-    frontPlot(frontEl, front, pick, sel);
-    const title = sel.kind === "point" ? `front point ${sel.index}` : `baseline ${sel.name}`;
+    trials.mark(sel.kind === "trial" ? sel.index : null);
+    if (front) drawFront();
+    const title = sel.kind === "point" ? `front point ${sel.index}` : sel.kind === "trial" ? `trial ${sel.index}` : `baseline ${sel.name}`;
     fill(motionCard, h("h2", `Motion of ${title}`), h("p.muted", "decoding…"));
-    const q = sel.kind === "point" ? `point=${sel.index}` : `baseline=${encodeURIComponent(sel.name)}`;
+    const q = sel.kind === "point" ? `point=${sel.index}` : sel.kind === "trial" ? `trial=${sel.index}` : `baseline=${encodeURIComponent(sel.name)}`;
     try {
       /** @type {MotionOut} */
       const motion = await api(`/jobs/${jobId}/motion?${q}`);
       if (selected !== sel || !alive) return;
       drawMotion(motion, title);
       if (sel.kind === "point") viewer.open(`/jobs/${jobId}/pareto/${sel.index}/recording`, `${title} of ${shortId(jobId)}`);
+      else if (sel.kind === "trial") viewer.open(`/jobs/${jobId}/trials/${sel.index}/recording`, `${title} of ${shortId(jobId)}`);
       else viewer.open(`/jobs/${jobId}/baselines/${encodeURIComponent(sel.name)}/recording`, `${title} of ${shortId(jobId)}`);
     } catch (err) {
       fill(motionCard, h("h2", `Motion of ${title}`), h("p.error", errorText(err)));
@@ -373,5 +421,5 @@ export async function render(main, jobId) {
   }
 
   await refresh();
-  return () => { alive = false; clearTimeout(timer); clearTimeout(metricsTimer); plots.forEach(purge); };
+  return () => { alive = false; stream.abort(); clearTimeout(timer); clearTimeout(metricsTimer); plots.forEach(purge); };
 }

@@ -3,7 +3,7 @@
 // job, download the list. A succeeded job whose optimum violates a constraint shows a red
 // "infeasible" badge in place of the green "succeeded" (the verdict filter finds them).
 import { api, download, idempotencyKey, query } from "../api.js";
-import { bar, best, clear, errorText, h, jobBadge, shortId, TERMINAL, when } from "../ui.js";
+import { bar, best, clear, errorText, h, jobBadge, num, shortId, TERMINAL, when } from "../ui.js";
 
 /** @typedef {import("../api_types").DashboardOptions} DashboardOptions */
 /** @typedef {import("../api_types").JobDetail} JobDetail */
@@ -126,7 +126,9 @@ export async function render(main, _param, hash) {
         h("td", h("a", { href: `#/job/${j.id}` }, j.name || shortId(j.id)), j.name ? h("div.muted.mono", shortId(j.id)) : null),
         h("td", j.kind), h("td", j.robot), h("td", j.optimizer), h("td", jobBadge(j)),
         h("td", bar(j.progress, `${j.generation}/${j.total_generations || "?"}`)),
-        h("td.num", best(j.best_objective)), h("td", when(j.created_at)), h("td", when(j.finished_at)),
+        h("td.num.best", j.best_named.length
+          ? j.best_named.map((q) => h("div", { title: q.label }, `${q.name} ${num(q.value)}${q.unit ? ` ${q.unit}` : ""}`))
+          : best(j.best_objective)), h("td", when(j.created_at)), h("td", when(j.finished_at)),
         h("td", j.tags.map((t) => h("span.tag", t)), j.sweep_id ? h("a.tag", { href: `#/sweep/${j.sweep_id}` }, "sweep") : null),
         h("td", actions(j)));
       tr.addEventListener("click", (ev) => {
@@ -184,7 +186,7 @@ export async function render(main, _param, hash) {
 export async function rerun(jobId) {
   /** @type {JobDetail} */
   const job = await api(`/jobs/${jobId}`);
-  const spec = { .../** @type {Record<string, unknown>} */ (job.spec), seed: Math.floor(Math.random() * 2 ** 31) };
+  const spec = { ...job.spec, seed: Math.floor(Math.random() * 2 ** 31) };
   return api("/jobs", { method: "POST", body: spec, headers: { "Idempotency-Key": idempotencyKey() } });
 }
 

@@ -1,0 +1,153 @@
+"""Request and response models of the API (what goes in, what comes out), by subject:
+:mod:`~services.api.schemas.common` (pages, errors, spec documents, health),
+:mod:`~services.api.schemas.robots`, :mod:`~services.api.schemas.jobs`,
+:mod:`~services.api.schemas.results` (with the stored documents of
+:mod:`~services.api.schemas.result_docs`) and :mod:`~services.api.schemas.sweeps`.
+
+Input models forbid unknown fields. Job specs and robot specs are received as plain JSON
+objects and validated by legcore itself (``services.api.validation``) so that errors name the
+spec's own fields; their OpenAPI schemas are legcore's (``JobSpec``, ``RobotSpec``), inlined.
+Output models are built from the store's frozen records by the ``from_record`` helpers; every
+field's shape is declared, so the OpenAPI document describes every response. What a worker
+stored is passed on as stored (``TypedDict`` s: the keys stored, no more, no fewer); only what
+belongs to a study or an optimiser (its extras, parameters, swept values) is ``JsonValue``.
+"""
+
+from services.api.schemas.common import (
+    DEFAULT_LIMIT,
+    MAX_LIMIT,
+    STORED_DOC,
+    BestObjective,
+    ErrorOut,
+    HealthOut,
+    JobSpecDoc,
+    JobSpecOut,
+    Page,
+    ReadyOut,
+    RobotDocOut,
+    RobotSpecDoc,
+    RobotSpecOut,
+    inline_json_schema,
+    job_spec_out_schema,
+    job_spec_schema,
+    robot_spec_schema,
+)
+from services.api.schemas.jobs import (
+    GenerationOut,
+    GenerationPage,
+    JobDetail,
+    JobFacts,
+    JobOut,
+    ParetoPage,
+    ParetoPointOut,
+)
+from services.api.schemas.result_docs import (
+    EarnedRow,
+    EarnedStart,
+    GapDoc,
+    HistoryRow,
+    ObjectivesDoc,
+    OptimizerRun,
+    RefineDoc,
+    ResultSummary,
+    SolutionDoc,
+    StartPoint,
+    TableRow,
+    TaskDoc,
+    ViolationDoc,
+)
+from services.api.schemas.results import ArtifactOut, BaselineOut, ResultOut, objective_names
+from services.api.schemas.robots import (
+    CatalogEntry,
+    RobotCreate,
+    RobotDetail,
+    RobotOut,
+    RobotSource,
+    RobotSummaryOut,
+    RobotValidate,
+    RobotValidation,
+)
+from services.api.schemas.sweeps import (
+    SweepAxes,
+    SweepCreate,
+    SweepCreated,
+    SweepOut,
+    SweepRow,
+    SweepState,
+    SweepSummary,
+    SweptValue,
+    sweep_state,
+)
+from services.api.verdict_schemas import (
+    GapOut,
+    TaskOut,
+    ViolationOut,
+    feasible_of,
+    violations_out,
+)
+
+__all__ = [
+    "DEFAULT_LIMIT",
+    "MAX_LIMIT",
+    "STORED_DOC",
+    "ArtifactOut",
+    "BaselineOut",
+    "BestObjective",
+    "CatalogEntry",
+    "EarnedRow",
+    "EarnedStart",
+    "ErrorOut",
+    "GapDoc",
+    "GapOut",
+    "GenerationOut",
+    "GenerationPage",
+    "HealthOut",
+    "HistoryRow",
+    "JobDetail",
+    "JobFacts",
+    "JobOut",
+    "JobSpecDoc",
+    "JobSpecOut",
+    "ObjectivesDoc",
+    "OptimizerRun",
+    "Page",
+    "ParetoPage",
+    "ParetoPointOut",
+    "ReadyOut",
+    "RefineDoc",
+    "ResultOut",
+    "ResultSummary",
+    "RobotCreate",
+    "RobotDetail",
+    "RobotDocOut",
+    "RobotOut",
+    "RobotSource",
+    "RobotSpecDoc",
+    "RobotSpecOut",
+    "RobotSummaryOut",
+    "RobotValidate",
+    "RobotValidation",
+    "SolutionDoc",
+    "StartPoint",
+    "SweepAxes",
+    "SweepCreate",
+    "SweepCreated",
+    "SweepOut",
+    "SweepRow",
+    "SweepState",
+    "SweepSummary",
+    "SweptValue",
+    "TableRow",
+    "TaskDoc",
+    "TaskOut",
+    "ViolationDoc",
+    "ViolationOut",
+    "feasible_of",
+    "inline_json_schema",
+    "job_spec_out_schema",
+    "job_spec_schema",
+    "objective_names",
+    "robot_spec_schema",
+    "sweep_state",
+    "violations_out",
+]
