@@ -121,7 +121,20 @@ class Client:
         return self._req("GET", path, params=params or None).json()
 
     def post(self, path: str, body: Any = None) -> Any:
-        return self._req("POST", path, json=body).json()
+        """POST ``body``; a 429 with a short ``Retry-After`` (the server did nothing: e.g. this
+        key's previous submission is still being validated) is sent again after the wait, for
+        up to ``COME_BACK_WINDOW_S``."""
+        come_back_until = time.monotonic() + COME_BACK_WINDOW_S
+        while True:
+            try:
+                return self._req("POST", path, json=body).json()
+            except ApiError as exc:
+                wait = exc.retry_after if exc.retry_after is not None else -1.0
+                if exc.status != 429 or not 0 <= wait <= MAX_RETRY_AFTER_S:
+                    raise
+                if time.monotonic() + wait > come_back_until:
+                    raise
+                time.sleep(wait)
 
     def create(self, path: str, body: Any, *, idempotency_key: str | None = None) -> Any:
         """POST that creates a resource, retried when the request may or may not have reached

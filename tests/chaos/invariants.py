@@ -19,7 +19,7 @@
 4. **Artifacts**: every ``artifacts`` row's file exists under ``LEGOPT_ARTIFACT_DIR`` with its
    size and SHA-256, and every succeeded job submitted with ``record: true`` has a recording.
 5. **No orphans**: see ``ChaosStack.leftover_processes`` (checked by the scenario).
-6. **Messages per job**: ``dispatched`` events per job; mean <= 3 and, per job,
+6. **Messages per job**: ``dispatched`` events per job; mean (beyond paced re-sends) <= 3; per job,
    <= 1 + the number of faults that happened while the job was not terminal, + 1 after a
    fault: the dispatcher's one early re-send when the broker holds fewer messages than there
    are queued jobs (a message a live worker has taken but not yet claimed is not counted by
@@ -318,11 +318,16 @@ def check_messages(
         source = "estimated from worker logs (1 + reaper re-sends)"
     per_job = {row["id"]: counts.get(row["id"], 0) for row in rows}
     mean = sum(per_job.values()) / len(per_job)
+    # the mean bound counts what the protocol does not pace: a re-send a lease or more after
+    # the one before is the backoff working on a slow machine, not a flood
+    unpaced = sum(max(0, n - paced[j]) for j, n in per_job.items()) / len(per_job)
     r.metrics["messages_per_job_mean"] = round(mean, 2)
+    r.metrics["messages_per_job_unpaced_mean"] = round(unpaced, 2)
     r.metrics["messages_per_job_max"] = max(per_job.values())
     r.metrics["messages_source"] = source
-    if mean > mean_limit:
-        r.fail(f"{mean:.2f} messages per job on average ({source}), limit {mean_limit}")
+    if unpaced > mean_limit:
+        r.fail(f"{unpaced:.2f} messages per job on average beyond the paced re-sends "
+               f"({source}; {mean:.2f} in all), limit {mean_limit}")  # fmt: skip
     for row in rows:
         during = faults_during(row, faults, now)
         bound = 1 + during + (1 if during else 0) + paced[row["id"]]

@@ -23,9 +23,17 @@ from services.api.schemas import (
 )
 from services.api.spec_cache import build_robot_cached
 from services.api.study_fits import StudyFitOut, robot_fits
+from services.api.submission import (
+    IdempotencyKey,
+    Replay,
+    check_replay,
+    remember,
+    replay_headers,
+)
 from services.api.validation import RobotInfo, robot_info, summarize_robot
 from services.api.validation_pool import check_robot
 from services.store import repository as repo
+from services.store.idempotency import request_fingerprint
 from services.store.records import RobotRecord
 
 router = APIRouter(tags=["robots"])
@@ -127,17 +135,34 @@ def _stored_model(spec: dict[str, Any]) -> Robot | LeggedRobot:
     responses={409: {"model": ErrorOut, "description": "You already have a robot of this name."}},
 )
 def create_robot(
-    body: RobotCreate, key: CurrentKey, ctx: Context, response: Response
+    body: RobotCreate,
+    key: CurrentKey,
+    ctx: Context,
+    response: Response,
+    idempotency_key: IdempotencyKey = None,
 ) -> RobotDetailOut:
     """Validate and build the model (a non-physical model is a 422 naming the field), then
-    store it. Job specs can then use its id (or name) as ``robot``."""
+    store it. Job specs can then use its id (or name) as ``robot``. Send an
+    ``Idempotency-Key`` header to make retries safe: the same key returns the robot the first
+    request stored (not a 409 for its name)."""
     if body.name in catalog.names():
         raise invalid(("body", "name"), f"{body.name!r} is a catalog robot's name; choose another")
-    info = check_robot(body.catalog, body.spec, settings=ctx.settings, key_id=key.id)
-    with ctx.write() as session:
-        record = repo.create_robot(
-            session, owner_key_id=key.id, name=body.name, source_kind=info.source, spec=info.spec
-        )
+    fingerprint = request_fingerprint(body.model_dump(mode="json"))
+    try:
+        with ctx.read() as session:
+            check_replay(session, key, idempotency_key, fingerprint, "robot")
+        info = check_robot(body.catalog, body.spec, settings=ctx.settings, key_id=key.id)
+        with ctx.write() as session:
+            check_replay(session, key, idempotency_key, fingerprint, "robot")
+            record = repo.create_robot(
+                session, owner_key_id=key.id, name=body.name, source_kind=info.source,
+                spec=info.spec,
+            )  # fmt: skip
+            remember(session, key, idempotency_key, fingerprint, "robot", record.id)
+    except Replay as replay:
+        response.headers.update(replay_headers())
+        response.headers["Location"] = f"{ctx.prefix}/robots/{replay.record.resource_id}"
+        return get_robot(replay.record.resource_id, key, ctx)
     response.headers["Location"] = f"{ctx.prefix}/robots/{record.id}"
     return _detail(_out(record), info)
 

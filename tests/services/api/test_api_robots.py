@@ -185,3 +185,19 @@ def test_delete_a_stored_robot(
     assert client.delete(f"{API}/robots/{rid}", headers=alice).status_code == 404
     again = client.post(f"{API}/robots", json={"name": "mine", "catalog": "puma560"}, headers=alice)
     assert again.status_code == 201, again.text
+
+
+def test_a_retried_robot_upload_returns_the_stored_robot(
+    client: TestClient, alice: dict[str, str]
+) -> None:
+    """A client that timed out and retries with the same Idempotency-Key gets the robot the
+    first request stored, not a 409 for its name (CI on a busy machine found the 409)."""
+    body = {"name": "retried_arm", "catalog": "puma560"}
+    headers = {**alice, "Idempotency-Key": "robot-retry-1"}
+    first = client.post(f"{API}/robots", json=body, headers=headers)
+    assert first.status_code == 201, first.text
+    again = client.post(f"{API}/robots", json=body, headers=headers)
+    assert again.status_code == 201 and again.headers["Idempotent-Replayed"] == "true"
+    assert again.json()["id"] == first.json()["id"]
+    other = client.post(f"{API}/robots", json=body, headers={**alice, "Idempotency-Key": "x2"})
+    assert other.status_code == 409  # a new request with the same name is still a conflict
