@@ -88,8 +88,10 @@ class TrialSet:
         if name in self.objective_names and len(self.objective_names) == m:
             return ev.F[:, self.objective_names.index(name)]
         for prefix, count, data in (("f", m, ev.F), ("x", n, ev.X)):
-            if name.startswith(prefix) and name[1:].isdigit() and 1 <= int(name[1:]) <= count:
-                return data[:, int(name[1:]) - 1]
+            digits = name[1:]
+            ascii_number = digits.isascii() and digits.isdigit()
+            if name.startswith(prefix) and ascii_number and 1 <= int(digits) <= count:
+                return data[:, int(digits) - 1]
         known = ["trial", "generation", "cv", f"f1…f{m}", f"x1…x{n}", *self.objective_names]
         raise TrialQueryError(field, f"no column {name!r}; columns: {', '.join(known)}")
 

@@ -144,7 +144,7 @@ async def get_point_recording(job_id: str, k: str, key: CurrentKey, ctx: Context
     before it is sent (``X-Checksum-SHA256``). Also ``legopt replay JOB --point K``."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-    if not k.isdigit() or len(k) > 9:
+    if not (k.isascii() and k.isdigit()) or len(k) > 9:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {k!r}")
     _succeeded(job, "a point's recording")
     artifact = await run_in_threadpool(point_recording, ctx, job, int(k))

@@ -196,7 +196,7 @@ async def get_trial_recording(job_id: str, t: str, key: CurrentKey, ctx: Context
     another key is a 404 whatever ``t`` is.)"""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-    if not t.isdigit() or len(t) > 9:
+    if not (t.isascii() and t.isdigit()) or len(t) > 9:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no trial {t!r}")
     artifact = await run_in_threadpool(trial_recording, ctx, job, int(t))
     return artifact_response(
