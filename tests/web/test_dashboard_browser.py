@@ -229,7 +229,7 @@ def test_jobs_front_point_replay_and_csv(
     time.sleep(2)  # let the viewer draw for the screenshot
     page.screenshot(path=shots / "job.png", full_page=True)
     front = _download(page, "[data-export=front-csv]", tmp_path / "front.csv")
-    assert list(front[0])[:3] == ["index", "time", "energy"] and front
+    assert list(front[0])[:3] == ["index", "time [s]", "energy [J]"] and front  # key [unit]
     # No uncaught error of any kind, the viewer's iframe included (same origin: its errors
     # reach "pageerror"). This used to let through every error whose text had "viewer" in it,
     # with no reason given; none was seen when that filter was removed (several runs, headless
@@ -402,7 +402,7 @@ def test_sweep_cells_robots_and_docs(page: Any, stack: Stack, shots: Path, tmp_p
     page.screenshot(path=shots / "sweep.png", full_page=True)
     cells = _download(page, "[data-export=cells-csv]", tmp_path / "cells.csv")
     assert [r["optimizer.params.pop_size"] for r in cells] == ["24", "32"]
-    assert all(r["succeeded"] == "2" and float(r["time_mean"]) > 0 for r in cells)
+    assert all(r["succeeded"] == "2" and float(r["time_mean [s]"]) > 0 for r in cells)
 
     page.goto(f"{stack.url}/#/robots")
     page.click("#robots-table tr[data-robot='articulated_5dof']")
