@@ -8,7 +8,7 @@ objectives the knee — the compromise point — of the current front (``legcore
 spreads (a best cycle time rising 10 → 13 s). The best of each objective so far is instead the
 running minimum, over generations, of the minimum of each generation's front
 (``front_min``), read from the stored fronts: the worker keeps every objective's extreme
-point when it thins a front (``services.worker.execute._thin_front``), so that minimum is the
+point when it thins a front (``services.worker.generation_keep.thin_front``), so that minimum is the
 whole front's; for rows written before it did, it is that of the thinned front.
 
 Values are shown as stored: every objective is minimised (an objective ``neg_<m>`` is the

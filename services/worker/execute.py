@@ -34,16 +34,10 @@ from pydantic import ValidationError
 
 from legcore.jobspec import spec_error_locations
 from legcore.optimizers import from_jsonable, to_jsonable
-from legcore.runner import RunResult, finalize, job_size, prepare
+from legcore.runner import RunResult, finalize, prepare
 from services.store.artifacts import ArtifactStore
 from services.store.errors import LeaseLostError
-from services.store.evaluations import (
-    MAX_STORED_EVALUATIONS,
-    EvaluationsIn,
-    evaluation_stride,
-    keeps_generation,
-    record_evaluations,
-)
+from services.store.evaluations import record_evaluations
 from services.store.lifecycle import (
     claim_job,
     fail_job,
@@ -67,6 +61,7 @@ from services.store.records import (
 from services.store.repository import job_spec
 from services.store.session import session_scope
 from services.store.settings import Settings, get_settings
+from services.worker.generation_keep import TrialKeeper, recording_fronts, thin_front
 from services.worker.hypervolume import HypervolumeTracker
 
 log = logging.getLogger("legopt.worker")
@@ -204,7 +199,7 @@ def _run_claimed(
         log.info("job %s resumes from its checkpoint at generation %d", job_id, resumed_from)
 
     pending: list[GenerationIn] = []  # generation rows not yet written
-    trials = _TrialKeeper(prepared)  # the evaluated solutions kept for the trial table
+    trials = TrialKeeper(prepared)  # the evaluated solutions kept for the trial table
     fronts: dict[int, Any] = {}  # this attempt's thinned fronts, for the recording
     last_flush = last_checkpoint = time.monotonic()
     min_checkpoint_s = 0.0 if settings.checkpoint_every == 1 else CHECKPOINT_MIN_S
@@ -217,7 +212,7 @@ def _run_claimed(
             return Outcome(job_id, "cancelled", resumed_from)
         t0 = time.perf_counter()
         progress = run.step()
-        front = _thin_front(progress.front_F)
+        front = thin_front(progress.front_F)
         if front is not None and prepared.spec.record:
             fronts[progress.generation] = front
         pending.append(
@@ -271,85 +266,9 @@ def _run_claimed(
             f"(attempt {job.attempt_count}) after the previous worker stopped"
         )
     attempt = f"a{job.attempt_count}-{uuid.uuid4().hex[:6]}"
-    recording_fronts = _recording_fronts(job_id, resumed_from, fronts)
-    _store_result(job_id, wid, attempt, settings, result, notes, cpu, recording_fronts)
+    kept_fronts = recording_fronts(job_id, resumed_from, fronts)
+    _store_result(job_id, wid, attempt, settings, result, notes, cpu, kept_fronts)
     return Outcome(job_id, "succeeded", resumed_from)
-
-
-class _TrialKeeper:
-    """The generations' evaluated solutions to store (``services.store.evaluations``): every
-    ``stride``-th generation and the last, at most ``MAX_STORED_EVALUATIONS`` solutions plus
-    the last generation's."""
-
-    def __init__(self, prepared: Any) -> None:
-        size = job_size(prepared)
-        self.stride = evaluation_stride(size.population, size.generations)
-        self.kept = 0
-        self.pending: list[EvaluationsIn] = []
-
-    def add(self, progress: Any, *, last: bool) -> None:
-        batch = progress.batch
-        if batch is None or not keeps_generation(progress.generation, self.stride, last):
-            return
-        n = int(batch.X.shape[0])
-        if not last and self.kept + n > MAX_STORED_EVALUATIONS:
-            return
-        self.kept += n
-        self.pending.append(EvaluationsIn(progress.generation, batch.X, batch.F, batch.cv))
-
-    def take(self) -> list[EvaluationsIn]:
-        out, self.pending = self.pending, []
-        return out
-
-
-MAX_FRONT_POINTS = 300
-
-
-def _thin_front(F: Any) -> Any:
-    """The objective vectors of a front, at most ``MAX_FRONT_POINTS`` (evenly strided, plus
-    the point of least value of each objective, so that the stored front's per-objective
-    minimum is the whole front's: the dashboard's best-so-far curves are read from it), as a
-    float (k, m) array (NaN where not finite: what the store keeps), or None for a
-    single-objective run (its front is just the best point)."""
-    import numpy as np
-
-    F = np.asarray(F, dtype=float)
-    if F.ndim != 2 or F.shape[1] < 2 or F.shape[0] == 0:
-        return None
-    if F.shape[0] > MAX_FRONT_POINTS:
-        finite = np.where(np.isfinite(F), F, np.inf)
-        extremes = {int(np.argmin(finite[:, j])) for j in range(F.shape[1])}
-        n = max(MAX_FRONT_POINTS - len(extremes), 2)
-        strided = set(np.linspace(0, F.shape[0] - 1, n).round().astype(int).tolist())
-        F = F[sorted(strided | extremes)]  # at most MAX_FRONT_POINTS rows
-    return np.where(np.isfinite(F), F, np.nan)
-
-
-def _recording_fronts(
-    job_id: str, resumed_from: int | None, fronts: dict[int, Any]
-) -> dict[int, Any] | None:
-    """{generation: F} of every generation with a front, across resumes: this attempt's from
-    memory; a resumed job reads those of its earlier attempts (up to its checkpoint) back."""
-    import numpy as np
-
-    out: dict[int, Any] = {}
-    if resumed_from is not None:
-        from services.store.repository import list_generations
-
-        after: int | None = None
-        with session_scope() as s:
-            while True:
-                rows = list_generations(s, job_id, after=after, limit=1000)
-                out.update(
-                    (g.generation, np.asarray(g.front, dtype=float))
-                    for g in rows
-                    if g.front and g.generation <= resumed_from
-                )
-                if len(rows) < 1000 or rows[-1].generation >= resumed_from:
-                    break
-                after = rows[-1].generation
-    out.update((g, np.asarray(F, dtype=float)) for g, F in fronts.items())
-    return out or None
 
 
 def _store_result(
@@ -464,40 +383,3 @@ def _write_recording(
     except Exception as exc:
         log.warning("job %s: recording failed: %s", job_id, traceback.format_exc())
         return f"recording failed: {type(exc).__name__}: {exc}"
-
-
-def run_payload(job_id: str) -> dict[str, Any]:
-    """Executed inside the Celery task (kept separate for tests)."""
-    outcome = execute_job(job_id)
-    _recycle_if_large(get_settings())
-    return {"job_id": outcome.job_id, "status": outcome.status}
-
-
-def resident_mb() -> float:
-    """Resident memory of this process (MiB), or 0 where it cannot be read."""
-    try:
-        with open("/proc/self/statm") as f:
-            pages = int(f.read().split()[1])
-        return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
-    except (OSError, ValueError, IndexError):
-        return 0.0
-
-
-def _recycle_if_large(settings: Settings) -> None:
-    """Worker recycling of a solo worker: past ``worker_max_memory_mb``, ask Celery for a warm
-    shutdown after this task (its message is handled); ``legopt serve`` or compose starts a
-    fresh worker. Nothing forks here, so nothing can deadlock. (Prefork pools recycle their
-    children with Celery's ``worker_max_memory_per_child``, set from the same setting.)"""
-    limit = settings.worker_max_memory_mb
-    if limit <= 0:
-        return
-    from billiard import current_process
-
-    if current_process().name != "MainProcess":
-        return  # a prefork pool child: Celery's worker_max_memory_per_child replaces it
-    rss = resident_mb()
-    if rss > limit:
-        from celery.worker import state
-
-        log.warning("worker uses %.0f MiB > %d MiB: it stops after this job", rss, limit)
-        state.should_stop = 0

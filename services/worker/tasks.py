@@ -8,8 +8,10 @@ import logging
 from celery import signals
 
 from services.store.dispatcher import Dispatcher
+from services.store.settings import get_settings
 from services.worker.celery_app import QUEUE, app
-from services.worker.execute import run_payload
+from services.worker.execute import execute_job
+from services.worker.recycling import recycle_if_large
 
 __all__ = ["enqueue", "queue_depth", "run_job"]
 
@@ -19,7 +21,9 @@ log = logging.getLogger("legopt.worker")
 @app.task(name="legopt.run_job", acks_late=True, reject_on_worker_lost=True)
 def run_job(job_id: str) -> dict[str, str]:
     """Run job ``job_id`` (a re-delivered or duplicate message is harmless: the claim decides)."""
-    return run_payload(job_id)
+    outcome = execute_job(job_id)
+    recycle_if_large(get_settings())
+    return {"job_id": outcome.job_id, "status": outcome.status}
 
 
 def enqueue(job_id: str) -> None:

@@ -23,7 +23,7 @@ from services.store.lifecycle import (
 from services.store.session import session_scope
 from services.store.settings import Settings
 from services.store.sql import now_utc
-from services.worker import execute
+from services.worker import execute, recycling
 
 SPEC: dict[str, Any] = {
     "problem": {"kind": "quadruped_gait"},
@@ -169,12 +169,12 @@ def test_a_solo_worker_past_its_memory_limit_stops_after_the_job(
     Celery for a warm shutdown after its job (``serve`` or compose starts a fresh one)."""
     from celery.worker import state
 
-    assert execute.resident_mb() > 10  # the real one reads /proc
+    assert recycling.resident_mb() > 10  # the real one reads /proc
     monkeypatch.setattr(state, "should_stop", None)
-    monkeypatch.setattr(execute, "resident_mb", lambda: 500.0)
-    execute._recycle_if_large(settings.with_overrides(worker_max_memory_mb=1000))
+    monkeypatch.setattr(recycling, "resident_mb", lambda: 500.0)
+    recycling.recycle_if_large(settings.with_overrides(worker_max_memory_mb=1000))
     assert state.should_stop is None
-    execute._recycle_if_large(settings.with_overrides(worker_max_memory_mb=0))  # off
+    recycling.recycle_if_large(settings.with_overrides(worker_max_memory_mb=0))  # off
     assert state.should_stop is None
-    execute._recycle_if_large(settings.with_overrides(worker_max_memory_mb=100))
+    recycling.recycle_if_large(settings.with_overrides(worker_max_memory_mb=100))
     assert state.should_stop == 0

@@ -21,7 +21,7 @@ from services.store.evaluations import (
 from services.store.keys import generate_api_key
 from services.store.session import session_scope
 from services.store.settings import Settings
-from services.worker import execute
+from services.worker import execute, generation_keep
 
 SPEC: dict[str, Any] = {
     "problem": {"kind": "hexapod_workspace"},
@@ -74,9 +74,9 @@ def test_a_job_stores_what_its_optimiser_evaluated(settings: Settings) -> None:
 
 
 def test_the_bound_holds(settings: Settings, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(execute, "MAX_STORED_EVALUATIONS", 50)
+    monkeypatch.setattr(generation_keep, "MAX_STORED_EVALUATIONS", 50)
     monkeypatch.setattr(
-        execute, "evaluation_stride", lambda p, g: evaluation_stride(p, g, bound=50)
+        generation_keep, "evaluation_stride", lambda p, g: evaluation_stride(p, g, bound=50)
     )
     job_id = _job(SPEC)
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
