@@ -16,9 +16,10 @@ from alembic import context
 from sqlalchemy.engine import Connection
 from sqlalchemy.pool import NullPool
 
+from services.store.search_index import is_search_index
 from services.store.session import make_engine, normalize_url
 from services.store.settings import get_settings
-from services.store.tables import Base, is_search_index
+from services.store.tables import Base
 from services.store.types import JSONValue, UTCDateTime
 
 config = context.config

@@ -124,15 +124,22 @@ class Client:
         """POST ``body``; a 429 with a short ``Retry-After`` (the server did nothing: e.g. this
         key's previous submission is still being validated) is sent again after the wait, for
         up to ``COME_BACK_WINDOW_S``."""
-        come_back_until = time.monotonic() + COME_BACK_WINDOW_S
+        return self._post_coming_back(path, body, time.monotonic() + COME_BACK_WINDOW_S)
+
+    def _post_coming_back(
+        self, path: str, body: Any, until: float, headers: dict[str, str] | None = None
+    ) -> Any:
+        """POST ``body``, sent again after the wait while the server answers 429 with a short
+        ``Retry-After`` (at most ``MAX_RETRY_AFTER_S``) that ends before ``until`` (a
+        ``time.monotonic()``); any other error, or a longer wait, is raised."""
         while True:
             try:
-                return self._req("POST", path, json=body).json()
+                return self._req("POST", path, json=body, headers=headers).json()
             except ApiError as exc:
                 wait = exc.retry_after if exc.retry_after is not None else -1.0
                 if exc.status != 429 or not 0 <= wait <= MAX_RETRY_AFTER_S:
                     raise
-                if time.monotonic() + wait > come_back_until:
+                if time.monotonic() + wait > until:
                     raise
                 time.sleep(wait)
 
@@ -148,18 +155,12 @@ class Client:
         come_back_until = time.monotonic() + COME_BACK_WINDOW_S
         while True:
             try:
-                return self._req("POST", path, json=body, headers=headers).json()
+                return self._post_coming_back(path, body, come_back_until, headers)
             except httpx.TransportError:
                 failures += 1
                 if failures >= CREATE_ATTEMPTS:
                     raise
             except ApiError as exc:
-                wait = exc.retry_after if exc.retry_after is not None else -1.0
-                if exc.status == 429 and 0 <= wait <= MAX_RETRY_AFTER_S:
-                    if time.monotonic() + wait > come_back_until:
-                        raise
-                    time.sleep(wait)
-                    continue
                 failures += 1
                 if exc.status not in _RETRY_STATUS or failures >= CREATE_ATTEMPTS:
                     raise

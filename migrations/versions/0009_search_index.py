@@ -6,9 +6,9 @@ Create Date: 2026-11-29
 
 Word search was ``job_labels.search LIKE '%word%'``: a scan of the key's labels (27 ms on
 SQLite, 38 ms on PostgreSQL at 10^5 jobs, growing linearly). This revision adds a substring
-index on that text (what ``services.store.tables`` describes next to ``SEARCH_FTS``). It is
+index on that text (what ``services.store.search_index`` describes). It is
 not part of the portable model: a comparison with the models leaves it out
-(``include_name``: ``services.store.tables.is_search_index``, as the migration test does).
+(``include_name``: ``services.store.search_index.is_search_index``, as the migration test does).
 
 - PostgreSQL: ``CREATE EXTENSION IF NOT EXISTS pg_trgm`` and a GIN index
   ``ix_job_labels_search_trgm (search gin_trgm_ops)``; the planner answers the unchanged

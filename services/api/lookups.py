@@ -1,13 +1,14 @@
 """What the routes share: the caller's job, sweep or robot by id (404 when missing or another
-key's; the job of the path also as the FastAPI dependency ``OwnedJob``), the jobs page's
-filters (a FastAPI dependency), a sweep's cell table and writing the labels of a key's new
-jobs. Routes import these from here, never from one another."""
+key's; the job of the path also as the FastAPI dependency ``OwnedJob``), an index of the path
+(a front point's, a trial's), the jobs page's filters (a FastAPI dependency), a sweep's cell
+table and writing the labels of a key's new jobs. Routes import these from here, never from
+one another."""
 
 from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import Depends, Query
+from fastapi import Depends, HTTPException, Query, status
 from sqlalchemy.orm import Session
 
 from services.api.deps import ApiContext, Context, CurrentKey
@@ -45,6 +46,15 @@ def path_job(job_id: str, key: CurrentKey, ctx: Context) -> JobRecord:
 #: The caller's job of the path's ``job_id`` (its frozen record), for a route that needs
 #: nothing else from the database in the same transaction; 404 when missing or another key's.
 OwnedJob = Annotated[JobRecord, Depends(path_job)]
+
+
+def path_index(job: JobRecord, text: str, what: str) -> int:
+    """The index ``text`` of the path (read as text: a job of another key is a 404 whatever it
+    is) as an int: ASCII digits only, at most 9 of them (a Unicode digit such as '²' passes
+    ``str.isdigit()`` and breaks ``int()``); else 404 ``job <id> has no <what> '<text>'``."""
+    if not (text.isascii() and text.isdigit()) or len(text) > 9:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no {what} {text!r}")
+    return int(text)
 
 
 def owned_sweep_jobs(
@@ -168,6 +178,7 @@ __all__ = [
     "job_filter",
     "owned_job",
     "owned_sweep_jobs",
+    "path_index",
     "path_job",
     "robot_lookup",
     "study_defaults",

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -137,24 +138,24 @@ def order(trials: TrialSet, idx: np.ndarray, sort: str, descending: bool) -> np.
     return idx[np.argsort(key, kind="stable")]
 
 
-def _cell(v: float) -> float | None:
-    return float(v) if math.isfinite(v) else None
+def _cells(values: np.ndarray) -> list[Any]:
+    """``values`` as (nested) lists of floats, None (JSON null) where not finite."""
+    cells = values.astype(object)
+    cells[~np.isfinite(values)] = None
+    return cells.tolist()
 
 
 def trial_rows(trials: TrialSet, idx: np.ndarray) -> list[TrialOut]:
     """The trials ``idx`` as rows."""
     ev = trials.ev
+    cv = ev.cv[idx]
     return [
-        TrialOut(
-            trial=int(i),
-            generation=int(ev.generation[i]),
-            x=[_cell(v) for v in ev.X[i].tolist()],
-            objectives=[_cell(v) for v in ev.F[i].tolist()],
-            cv=float(ev.cv[i]),
-            feasible=bool(ev.cv[i] <= 0.0),
+        TrialOut(trial=i, generation=g, x=x, objectives=f, cv=c, feasible=ok)
+        for i, g, x, f, c, ok in zip(
+            idx.tolist(), ev.generation[idx].tolist(), _cells(ev.X[idx]), _cells(ev.F[idx]),
+            cv.tolist(), (cv <= 0.0).tolist(), strict=True,
         )
-        for i in idx.tolist()
-    ]
+    ]  # fmt: skip
 
 
 def trial_page(
@@ -188,12 +189,10 @@ def trial_columns(trials: TrialSet, idx: np.ndarray, max_rows: int) -> TrialColu
     return TrialColumns(
         **trials.meta(),  # type: ignore[arg-type]
         matched=int(idx.size),
-        trial=[int(i) for i in picked.tolist()],
-        feasible=[bool(v) for v in (ev.cv[picked] <= 0.0).tolist()],
-        x_values=[[_cell(v) for v in ev.X[picked, i].tolist()] for i in range(ev.X.shape[1])],
-        objective_values=[
-            [_cell(v) for v in ev.F[picked, j].tolist()] for j in range(ev.F.shape[1])
-        ],
+        trial=picked.tolist(),
+        feasible=(ev.cv[picked] <= 0.0).tolist(),
+        x_values=_cells(ev.X[picked].T),
+        objective_values=_cells(ev.F[picked].T),
     )
 
 

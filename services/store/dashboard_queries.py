@@ -42,14 +42,8 @@ from sqlalchemy.sql.compiler import SQLCompiler
 from sqlalchemy.sql.selectable import Join
 
 from services.store.records import JobRecord
-from services.store.tables import (
-    JOB_LABELS,
-    JOBS,
-    MIN_INDEXED_WORD,
-    SEARCH_FTS,
-    SWEEPS,
-    JobStatus,
-)
+from services.store.search_index import MIN_INDEXED_WORD, SEARCH_FTS
+from services.store.tables import JOB_LABELS, JOBS, SWEEPS, JobStatus
 
 #: Jobs created this long before the newest labelled one are checked again for a label (a
 #: transaction that committed late); PostgreSQL commits a job within ms of its created_at.

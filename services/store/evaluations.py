@@ -59,6 +59,12 @@ class Evaluations:
     def __len__(self) -> int:
         return int(self.generation.shape[0])
 
+    @classmethod
+    def empty(cls, n_var: int, n_obj: int) -> Evaluations:
+        """No evaluations, with ``n_var`` variables and ``n_obj`` objectives (a job that has
+        stored none yet)."""
+        return cls(np.zeros(0, dtype=int), np.zeros((0, n_var)), np.zeros((0, n_obj)), np.zeros(0))
+
 
 def evaluation_stride(population: int, generations: int,
                       bound: int = MAX_STORED_EVALUATIONS) -> int:  # fmt: skip
@@ -114,10 +120,6 @@ def load_evaluations(session: Session, job_id: str) -> Evaluations | None:
     if not rows:
         return None
     xs = [decode_front_array(r.x_packed) for r in rows]
-    n_var = max(x.shape[1] for x in xs)
-    if any(x.shape[1] != n_var for x in xs):  # never written so; read defensively
-        xs = [x for x in xs if x.shape[1] == n_var]
-        rows = [r for r in rows if decode_front_array(r.x_packed).shape[1] == n_var]
     return Evaluations(
         generation=np.concatenate(
             [np.full(x.shape[0], int(r.generation)) for r, x in zip(rows, xs, strict=True)]

@@ -15,7 +15,7 @@ from services.api.artifact_download import artifact_response
 from services.api.dashboard_schemas import FrontOut, MotionOut
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.front_view import front_out
-from services.api.lookups import OwnedJob, owned_job
+from services.api.lookups import OwnedJob, owned_job, path_index
 from services.api.points import (
     baseline_recording,
     point_metrics,
@@ -144,11 +144,10 @@ async def get_point_recording(job_id: str, k: str, key: CurrentKey, ctx: Context
     before it is sent (``X-Checksum-SHA256``). Also ``legopt replay JOB --point K``."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-    if not (k.isascii() and k.isdigit()) or len(k) > 9:
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no front point {k!r}")
+    index = path_index(job, k, "front point")
     _succeeded(job, "a point's recording")
-    artifact = await run_in_threadpool(point_recording, ctx, job, int(k))
-    return _rrd(ctx, job, artifact, f"point {k}", f"{job.id}-point-{int(k)}.rrd")
+    artifact = await run_in_threadpool(point_recording, ctx, job, index)
+    return _rrd(ctx, job, artifact, f"point {k}", f"{job.id}-point-{index}.rrd")
 
 
 def _rrd(ctx: ApiContext, job: JobRecord, artifact: Any, what: str, name: str) -> Response:

@@ -6,14 +6,14 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, HTTPException, Query, status
+from fastapi import APIRouter, Query
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 
 from services.api.artifact_download import artifact_response
 from services.api.deps import ApiContext, Context, CurrentKey, Pagination
 from services.api.errors import invalid
-from services.api.lookups import owned_job
+from services.api.lookups import owned_job, path_index
 from services.api.points import trial_recording
 from services.api.schemas import ErrorOut
 from services.api.trial_schemas import ImportanceOut, TrialColumns, TrialPage
@@ -54,14 +54,6 @@ Ranges = Annotated[
 ]
 
 
-def _empty(n_var: int, n_obj: int) -> Evaluations:
-    import numpy as np
-
-    return Evaluations(
-        np.zeros(0, dtype=int), np.zeros((0, n_var)), np.zeros((0, n_obj)), np.zeros(0)
-    )
-
-
 def _trials(ctx: ApiContext, job: JobRecord) -> TrialSet:
     facts = job.facts if isinstance(job.facts, dict) else {}
     names = tuple(str(n) for n in facts.get("objectives") or ())
@@ -71,7 +63,7 @@ def _trials(ctx: ApiContext, job: JobRecord) -> TrialSet:
         with ctx.read() as session:
             ev = load_evaluations(session, job.id)
         if ev is None:
-            ev = _empty(int(facts.get("n_var") or 0), len(names))
+            ev = Evaluations.empty(int(facts.get("n_var") or 0), len(names))
         return TrialSet(job.id, ev, names, kind)
 
     if job.status.is_terminal:
@@ -196,9 +188,8 @@ async def get_trial_recording(job_id: str, t: str, key: CurrentKey, ctx: Context
     another key is a 404 whatever ``t`` is.)"""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-    if not (t.isascii() and t.isdigit()) or len(t) > 9:
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no trial {t!r}")
-    artifact = await run_in_threadpool(trial_recording, ctx, job, int(t))
+    index = path_index(job, t, "trial")
+    artifact = await run_in_threadpool(trial_recording, ctx, job, index)
     return artifact_response(
         ctx,
         artifact,

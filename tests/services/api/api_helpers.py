@@ -2,14 +2,26 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
+import pytest
+from fastapi.testclient import TestClient
 from sqlalchemy import func, select
 
+from services.api.app import create_app
 from services.api.deps import ApiContext
 from services.store.keys import generate_api_key
+from services.store.migrate import upgrade
 from services.store.repository import create_api_key
+from services.store.session import reset_engine
+from services.store.settings import Settings, get_settings
 from services.store.tables import JOBS, ROBOTS, SWEEPS
+
+API = "/api/v1"
 
 
 def new_key(ctx: ApiContext, name: str) -> tuple[str, str]:
@@ -18,6 +30,45 @@ def new_key(ctx: ApiContext, name: str) -> tuple[str, str]:
     with ctx.write() as s:
         record = create_api_key(s, name=name, key_hash=key_hash)
     return raw, record.id
+
+
+@dataclass(frozen=True)
+class FreshApp:
+    """An app of :func:`fresh_app`: its started test client, its context and settings, the
+    headers of each of its API keys by name, and the monkeypatch holding its environment
+    (undone when ``fresh_app`` ends)."""
+
+    client: TestClient
+    ctx: ApiContext
+    settings: Settings
+    keys: dict[str, dict[str, str]]
+    mp: pytest.MonkeyPatch
+
+
+@contextmanager
+def fresh_app(tmp: Path, *names: str) -> Iterator[FreshApp]:
+    """An app on a fresh migrated SQLite database in ``tmp`` (also its data directory, set as
+    ``LEGOPT_DATA_DIR`` and ``LEGOPT_DATABASE_URL``) that enqueues nothing, with an API key
+    per name in ``names``; for a module's fixture whose jobs a test runs itself. The
+    environment, the settings' cache and the engine are reset at the end."""
+    mp = pytest.MonkeyPatch()
+    url = f"sqlite:///{tmp / 'legopt.db'}"
+    mp.setenv("LEGOPT_DATA_DIR", str(tmp))
+    mp.setenv("LEGOPT_DATABASE_URL", url)
+    get_settings.cache_clear()
+    reset_engine()
+    try:
+        upgrade(url)
+        settings = get_settings()
+        app = create_app(settings, enqueue=lambda _j: None)
+        ctx: ApiContext = app.state.context
+        keys = {name: {"X-API-Key": new_key(ctx, name)[0]} for name in names}
+        with TestClient(app) as client:
+            yield FreshApp(client, ctx, settings, keys, mp)
+    finally:
+        mp.undo()
+        get_settings.cache_clear()
+        reset_engine()
 
 
 def row_counts(ctx: ApiContext) -> dict[str, int]:
@@ -140,3 +191,40 @@ def finish_like_a_worker(
             baselines=[BaselineIn("parabolic", {"energy_J": 3.0})],
             artifacts=artifacts,
         )
+
+
+#: The single job of :func:`dashboard_env` (its sweep's base too).
+DASHBOARD_SPEC: dict[str, Any] = {
+    "name": "front demo",
+    "tags": ["demo", "energy-time"],
+    "problem": {"kind": "path_tracking", "objective": "energy_time"},
+    "optimizer": {"kind": "nsga2", "params": {"pop_size": 24}},
+    "budget": {"generations": 8},
+    "seed": 2,
+}
+
+
+@contextmanager
+def dashboard_env(tmp: Path) -> Iterator[dict[str, Any]]:
+    """The dashboard tests' app (:func:`fresh_app` in ``tmp``): Alice's single job
+    (``DASHBOARD_SPEC``) and her sweep of 2 cells x 2 seeds, all run to the end by the real
+    executor; Bob's and Carol's keys."""
+    from services.worker.execute import execute_job
+
+    with fresh_app(tmp, "alice", "bob", "carol") as app:
+        client, alice = app.client, app.keys["alice"]
+        r = client.post(f"{API}/jobs", json=DASHBOARD_SPEC, headers=alice)
+        assert r.status_code == 202, r.text
+        job_id = r.json()["id"]
+        sweep = {
+            "base": {**DASHBOARD_SPEC, "name": "sweep demo", "record": False},
+            "grid": {"optimizer.params.pop_size": [24, 32]},
+            "seeds": [1, 2],
+        }
+        r = client.post(f"{API}/sweeps", json=sweep, headers=alice)
+        assert r.status_code == 202, r.text
+        sweep_id, sweep_jobs = r.json()["id"], r.json()["job_ids"]
+        for j in [job_id, *sweep_jobs]:
+            assert execute_job(j, app.settings).status == "succeeded"
+        yield {"client": client, "ctx": app.ctx, "job": job_id, "sweep": sweep_id,
+               "sweep_jobs": sweep_jobs, **app.keys}  # fmt: skip

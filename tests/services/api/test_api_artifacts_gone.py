@@ -18,15 +18,13 @@ from urllib.parse import quote
 
 import httpx
 import pytest
+from api_helpers import fresh_app
 from fastapi.testclient import TestClient
 
 from services.api.app import create_app
 from services.client import Client
 from services.store import repository as repo
-from services.store.keys import generate_api_key
-from services.store.migrate import upgrade
-from services.store.session import reset_engine
-from services.store.settings import Settings, get_settings
+from services.store.settings import Settings
 from services.worker.execute import execute_job
 from tests.s3_server import aws_env, free_port, moto_server, s3_client
 
@@ -46,21 +44,8 @@ PREFIX = "legopt/gone"
 @pytest.fixture(scope="module")
 def env(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
     """One job and a sweep of two, recorded, run to the end with the local artifact store."""
-    tmp = tmp_path_factory.mktemp("gone")
-    mp = pytest.MonkeyPatch()
-    url = f"sqlite:///{tmp / 'legopt.db'}"
-    mp.setenv("LEGOPT_DATA_DIR", str(tmp))
-    mp.setenv("LEGOPT_DATABASE_URL", url)
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    settings = get_settings()
-    app = create_app(settings, enqueue=lambda _j: None)
-    raw, key_hash = generate_api_key()
-    with app.state.context.write() as s:
-        repo.create_api_key(s, name="alice", key_hash=key_hash)
-    alice = {"X-API-Key": raw}
-    with TestClient(app) as client:
+    with fresh_app(tmp_path_factory.mktemp("gone"), "alice") as app:
+        client, settings, alice = app.client, app.settings, app.keys["alice"]
         r = client.post(f"{API}/jobs", json=SPEC, headers=alice)
         assert r.status_code == 202, r.text
         job = r.json()["id"]
@@ -71,10 +56,7 @@ def env(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
             assert execute_job(j, settings).status == "succeeded"
         baselines = client.get(f"{API}/jobs/{job}/front", headers=alice).json()["baselines"]
         yield {"client": client, "settings": settings, "alice": alice, "job": job,
-               "sweep": sweep, "baseline": quote(baselines[0]["name"]), "mp": mp}  # fmt: skip
-    mp.undo()
-    get_settings.cache_clear()
-    reset_engine()
+               "sweep": sweep, "baseline": quote(baselines[0]["name"]), "mp": app.mp}  # fmt: skip
 
 
 @pytest.fixture(scope="module")

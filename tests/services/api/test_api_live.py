@@ -10,16 +10,10 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from fastapi.testclient import TestClient
+from api_helpers import fresh_app
 
-from services.api.app import create_app
 from services.api.deps import ApiContext
-from services.store import repository as repo
-from services.store.keys import generate_api_key
 from services.store.lifecycle import claim_job, fail_job, record_generation
-from services.store.migrate import upgrade
-from services.store.session import reset_engine
-from services.store.settings import get_settings
 
 API = "/api/v1"
 SPEC: dict[str, Any] = {
@@ -32,31 +26,13 @@ SPEC: dict[str, Any] = {
 
 @pytest.fixture
 def env(tmp_path: Any) -> Iterator[dict[str, Any]]:
-    mp = pytest.MonkeyPatch()
-    url = f"sqlite:///{tmp_path / 'legopt.db'}"
-    mp.setenv("LEGOPT_DATA_DIR", str(tmp_path))
-    mp.setenv("LEGOPT_DATABASE_URL", url)
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    app = create_app(get_settings(), enqueue=lambda _j: None)
-    ctx: ApiContext = app.state.context
-    keys = {}
-    for name in ("alice", "bob"):
-        raw, key_hash = generate_api_key()
-        with ctx.write() as s:
-            repo.create_api_key(s, name=name, key_hash=key_hash)
-        keys[name] = {"X-API-Key": raw}
-    with TestClient(app) as client:
-        r = client.post(f"{API}/jobs", json=SPEC, headers=keys["alice"])
+    with fresh_app(tmp_path, "alice", "bob") as app:
+        r = app.client.post(f"{API}/jobs", json=SPEC, headers=app.keys["alice"])
         assert r.status_code == 202, r.text
         job_id = r.json()["id"]
-        with ctx.write() as s:
+        with app.ctx.write() as s:
             assert claim_job(s, job_id, "w1", 60.0) is not None
-        yield {"client": client, "ctx": ctx, "job": job_id, **keys}
-    mp.undo()
-    get_settings.cache_clear()
-    reset_engine()
+        yield {"client": app.client, "ctx": app.ctx, "job": job_id, **app.keys}
 
 
 def _generation(ctx: ApiContext, job_id: str, g: int, front: Any = None) -> None:

@@ -10,15 +10,8 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from fastapi.testclient import TestClient
+from api_helpers import fresh_app
 
-from services.api.app import create_app
-from services.api.deps import ApiContext
-from services.store import repository as repo
-from services.store.keys import generate_api_key
-from services.store.migrate import upgrade
-from services.store.session import reset_engine
-from services.store.settings import get_settings
 from services.worker.execute import execute_job
 
 pytestmark = pytest.mark.slow  # the quick lane (run.py test --quick) leaves it out
@@ -39,33 +32,14 @@ SPEC: dict[str, Any] = {
 @pytest.fixture(scope="module")
 def env(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
     """An app on a fresh database with one job of Alice's run to the end; Bob's key."""
-    tmp = tmp_path_factory.mktemp("trials")
-    mp = pytest.MonkeyPatch()
-    url = f"sqlite:///{tmp / 'legopt.db'}"
-    mp.setenv("LEGOPT_DATA_DIR", str(tmp))
-    mp.setenv("LEGOPT_DATABASE_URL", url)
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    settings = get_settings()
-    app = create_app(settings, enqueue=lambda _j: None)
-    ctx: ApiContext = app.state.context
-    keys = {}
-    for name in ("alice", "bob"):
-        raw, key_hash = generate_api_key()
-        with ctx.write() as s:
-            repo.create_api_key(s, name=name, key_hash=key_hash)
-        keys[name] = {"X-API-Key": raw}
-    with TestClient(app) as client:
-        r = client.post(f"{API}/jobs", json=SPEC, headers=keys["alice"])
+    with fresh_app(tmp_path_factory.mktemp("trials"), "alice", "bob") as app:
+        client, alice = app.client, app.keys["alice"]
+        r = client.post(f"{API}/jobs", json=SPEC, headers=alice)
         assert r.status_code == 202, r.text
         job_id = r.json()["id"]
-        before = client.get(f"{API}/jobs/{job_id}/trials", headers=keys["alice"]).json()
-        assert execute_job(job_id, settings).status == "succeeded"
-        yield {"client": client, "job": job_id, "before": before, **keys}
-    mp.undo()
-    get_settings.cache_clear()
-    reset_engine()
+        before = client.get(f"{API}/jobs/{job_id}/trials", headers=alice).json()
+        assert execute_job(job_id, app.settings).status == "succeeded"
+        yield {"client": client, "job": job_id, "before": before, **app.keys}
 
 
 def _all(env: dict[str, Any], query: str = "") -> dict[str, Any]:
@@ -159,6 +133,9 @@ def test_a_non_front_trial_has_its_motion_and_recording(env: dict[str, Any]) -> 
     assert again.content == rec.content
     missing = client.get(f"{API}/jobs/{job}/motion?trial=999999", headers=alice)
     assert missing.status_code == 404 and "no trial 999999" in missing.json()["detail"]
+    for bad in ("²", "x", "1234567890"):  # a path index: ASCII digits only, else a 404
+        r = client.get(f"{API}/jobs/{job}/trials/{bad}/recording", headers=alice)
+        assert r.status_code == 404 and f"no trial {bad!r}" in r.json()["detail"], bad
 
 
 def test_parameter_importance(env: dict[str, Any]) -> None:
@@ -190,3 +167,57 @@ def test_importance_finds_the_variable_that_matters() -> None:
     out = importance(TrialSet("j", ev, ("a", "b")))
     assert int(np.argmax(out.importance[0])) == 1 and out.importance[0][1] > 0.8
     assert {int(i) for i in np.argsort(out.importance[1])[-2:]} == {0, 2}
+
+
+def test_rows_and_columns_serve_non_finite_values_as_null() -> None:
+    """NaN and ±inf (a failed evaluation's objectives) are null in the rows and the columns;
+    every other value is a plain float, in the trials' order; an empty selection is empty."""
+    import numpy as np
+
+    from services.api.trial_view import TrialSet, trial_columns, trial_rows
+    from services.store.evaluations import Evaluations
+
+    nan, inf = float("nan"), float("inf")
+    X = np.array([[0.5, -1.0], [nan, 2.0], [3.0, inf]])
+    F = np.array([[1.0, nan], [-inf, 2.5], [0.0, 7.0]])
+    ev = Evaluations(np.array([1, 1, 2]), X, F, np.array([0.0, 0.25, 0.0]))
+    trials = TrialSet("j", ev, ("a", "b"))
+    rows = trial_rows(trials, np.array([2, 0, 1]))
+    assert [r.model_dump() for r in rows] == [
+        {"trial": 2, "generation": 2, "x": [3.0, None], "objectives": [0.0, 7.0], "cv": 0.0,
+         "feasible": True},
+        {"trial": 0, "generation": 1, "x": [0.5, -1.0], "objectives": [1.0, None], "cv": 0.0,
+         "feasible": True},
+        {"trial": 1, "generation": 1, "x": [None, 2.0], "objectives": [None, 2.5], "cv": 0.25,
+         "feasible": False},
+    ]  # fmt: skip
+    assert all(type(v) is float for r in rows for v in r.x + r.objectives if v is not None)
+    cols = trial_columns(trials, np.arange(3), 10)
+    assert cols.trial == [0, 1, 2] and cols.feasible == [True, False, True]
+    assert cols.x_values == [[0.5, None, 3.0], [-1.0, 2.0, None]]
+    assert cols.objective_values == [[1.0, None, 0.0], [None, 2.5, 7.0]]
+    assert all(type(v) is float for c in cols.x_values + cols.objective_values for v in c
+               if v is not None)  # fmt: skip
+    none = np.array([], dtype=int)
+    assert trial_rows(trials, none) == []
+    empty = trial_columns(trials, none, 10)
+    assert empty.trial == [] and empty.x_values == [[], []] and empty.objective_values == [[], []]
+    blank = TrialSet("j", Evaluations.empty(2, 2), ("a", "b"))
+    assert trial_columns(blank, none, 10).x_values == [[], []] and len(blank.ev) == 0
+
+
+def test_a_path_index_is_ascii_digits_only() -> None:
+    """A trial's or a front point's index of the path: up to 9 ASCII digits, else the 404 the
+    routes answer (a Unicode digit such as '²' passes ``str.isdigit()`` and breaks ``int()``)."""
+    from fastapi import HTTPException
+
+    from services.api.lookups import path_index
+
+    job: Any = type("Job", (), {"id": "j1"})()
+    assert path_index(job, "0", "trial") == 0 and path_index(job, "007", "trial") == 7
+    assert path_index(job, "999999999", "front point") == 999_999_999
+    for bad in ("²", "1²", "٣", "x", "-1", "+1", " 1", "", "1234567890"):
+        with pytest.raises(HTTPException) as err:
+            path_index(job, bad, "front point")
+        assert err.value.status_code == 404
+        assert err.value.detail == f"job j1 has no front point {bad!r}"

@@ -15,8 +15,9 @@ from sqlalchemy.pool import NullPool
 from store_testdb import requires_postgres, sqlite_url
 
 from services.store import migrate
+from services.store.search_index import is_search_index
 from services.store.session import make_engine
-from services.store.tables import Base, is_search_index
+from services.store.tables import Base
 
 ROOT = Path(__file__).resolve().parents[3]
 TABLES = {t.name for t in Base.metadata.sorted_tables}

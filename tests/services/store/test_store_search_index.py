@@ -26,10 +26,11 @@ from store_testdb import PG_ADMIN_URL, requires_postgres, sqlite_url
 
 from services.api.lookups import study_defaults
 from services.store import dashboard_queries as dq
-from services.store import migrate, tables
+from services.store import migrate, search_index
 from services.store import repository as repo
+from services.store.search_index import SEARCH_FTS, SEARCH_TRGM_INDEX
 from services.store.session import make_engine
-from services.store.tables import JOB_LABELS, JOBS, SEARCH_FTS, SEARCH_TRGM_INDEX, Base, JobStatus
+from services.store.tables import JOB_LABELS, JOBS, Base, JobStatus
 
 NAMES = [
     "Calderon leg 100%_done", 'quote "this"', "back\\slash", "Ünïcode Straße", "wide sweep",
@@ -331,7 +332,7 @@ def test_sqlite_without_trigram_fts_searches_by_like(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """An SQLite without FTS5 / the trigram tokenizer gets no FTS table and the same results."""
-    monkeypatch.setattr(tables, "sqlite_has_trigram_fts", lambda _c: False)
+    monkeypatch.setattr(search_index, "sqlite_has_trigram_fts", lambda _c: False)
     engine = make_engine(sqlite_url(tmp_path))
     Base.metadata.create_all(engine)
     factory = sessionmaker(engine)
