@@ -43,6 +43,7 @@ from sqlalchemy.sql.selectable import Join
 
 from services.store.records import JobRecord
 from services.store.search_index import MIN_INDEXED_WORD, SEARCH_FTS
+from services.store.sql import COUNT_CAP
 from services.store.tables import JOB_LABELS, JOBS, SWEEPS, JobStatus
 
 #: Jobs created this long before the newest labelled one are checked again for a label (a
@@ -433,11 +434,6 @@ class _Order:
         typed = [literal(v, type_=c.type) for c, v in zip(cols, values, strict=True)]
         left, right = tuple_(*cols), tuple_(*typed)
         return left < right if self.descending else left > right
-
-
-#: A listing counts its matches up to this many (then says "more than"): an exact count of
-#: 10^5 rows would cost more than the page itself.
-COUNT_CAP = 10_000
 
 
 def _keyset_rows(

@@ -38,6 +38,7 @@ from services.store.records import (
 from services.store.robot_documents import by_reference, expand
 from services.store.specs import apply_overrides, json_size, spec_value
 from services.store.sql import (
+    COUNT_CAP,
     MAX_PAGE_SIZE,
     check_page,
     fetch_all,
@@ -445,7 +446,8 @@ def list_jobs(
 ) -> Page[JobRecord]:
     """Jobs filtered by owner, status (one or several), sweep, id prefix (a range of the
     primary key's index: ``services.store.id_prefix``) and verdict (``feasible`` True or
-    False: only succeeded jobs whose optimum was found feasible / infeasible), newest first."""
+    False: only succeeded jobs whose optimum was found feasible / infeasible), newest first.
+    ``total`` counts up to ``COUNT_CAP + 1`` (``services.store.sql``: "more than")."""
     conditions = _owned(JOBS, owner_key_id)
     if id_prefix:
         conditions = owned_with_prefix(JOBS, owner_key_id, id_prefix)
@@ -456,9 +458,8 @@ def list_jobs(
     if feasible is not None:
         conditions.append(JOBS.c.feasible == bool(feasible))
     stmt = select(JOBS).where(*conditions)
-    return fetch_page(
-        session, JobRecord, stmt, (JOBS.c.created_at.desc(), JOBS.c.id), limit, offset
-    )
+    order = (JOBS.c.created_at.desc(), JOBS.c.id)
+    return fetch_page(session, JobRecord, stmt, order, limit, offset, count_cap=COUNT_CAP)
 
 
 def count_jobs_by_status(

@@ -25,6 +25,9 @@ from services.store.types import as_utc, utcnow
 R = TypeVar("R")
 
 MAX_PAGE_SIZE = 1000
+#: A listing of jobs counts its matches up to this many, then says "more than" (its ``total``
+#: is ``COUNT_CAP + 1``): an exact count of 10^5 rows would cost more than the page itself.
+COUNT_CAP = 10_000
 
 
 def now_utc(now: datetime | None = None) -> datetime:
@@ -73,10 +76,15 @@ def fetch_page(
     order_by: Iterable[ColumnElement[Any]],
     limit: int,
     offset: int,
+    *,
+    count_cap: int | None = None,
 ) -> Page[R]:
-    """One page of ``stmt`` (ordered by ``order_by``) with the total count of its rows."""
+    """One page of ``stmt`` (ordered by ``order_by``) with the total count of its rows; with
+    ``count_cap``, counted up to ``count_cap + 1`` (that value then means "more than
+    ``count_cap``"), so the count costs no more as the table grows."""
     check_page(limit, offset)
-    total = session.execute(select(func.count()).select_from(stmt.subquery())).scalar_one()
+    counted = stmt if count_cap is None else stmt.limit(count_cap + 1)
+    total = session.execute(select(func.count()).select_from(counted.subquery())).scalar_one()
     items = fetch_all(session, cls, stmt.order_by(*order_by).limit(limit).offset(offset))
     return Page(items=items, total=int(total), limit=limit, offset=offset)
 

@@ -27,8 +27,8 @@ from services.api.schemas import (
     GenerationPage,
     JobDetail,
     JobOut,
+    JobPage,
     JobSpecDoc,
-    Page,
     ParetoPage,
     ParetoPointOut,
     ResultOut,
@@ -124,7 +124,7 @@ def submit_job(
     return JobDetail.from_record(job, checked.spec)
 
 
-@router.get("/jobs", response_model=Page[JobOut], summary="List your jobs (newest first)")
+@router.get("/jobs", response_model=JobPage, summary="List your jobs (newest first)")
 def list_jobs(
     key: CurrentKey,
     ctx: Context,
@@ -141,7 +141,7 @@ def list_jobs(
             "(false)."
         ),
     ] = None,
-) -> Page[JobOut]:
+) -> JobPage:
     """Your jobs, filtered by status (repeat the parameter for several), sweep, id prefix
     (what `legopt status 2253` resolves: a range scan of the primary key) and verdict
     (`feasible`). Each job carries its verdict once it succeeded: `feasible` and the
@@ -158,7 +158,7 @@ def list_jobs(
             offset=page.offset,
         )
         labels = repo.job_labels(session, jobs.items)
-    return Page[JobOut](
+    return JobPage(
         items=[JobOut.from_record(j, labels[j.id]) for j in jobs.items],
         total=jobs.total,
         limit=jobs.limit,

@@ -57,7 +57,7 @@ def unfinished_job_ids(session: Session, owner_key_id: str, sweep_id: str) -> li
             offset=len(ids),
         )
         ids += [j.id for j in page.items]
-        if not page.items or len(ids) >= page.total:
+        if len(page.items) < _PAGE:  # the last page (``total`` is capped: not a bound)
             return ids
 
 

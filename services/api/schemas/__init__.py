@@ -38,6 +38,7 @@ from services.api.schemas.jobs import (
     JobDetail,
     JobFacts,
     JobOut,
+    JobPage,
     ParetoPage,
     ParetoPointOut,
 )
@@ -106,6 +107,7 @@ __all__ = [
     "JobDetail",
     "JobFacts",
     "JobOut",
+    "JobPage",
     "JobSpecDoc",
     "JobSpecOut",
     "ObjectivesDoc",

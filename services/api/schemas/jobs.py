@@ -16,6 +16,7 @@ from services.api.verdict_schemas import (
     violations_out,
 )
 from services.store.records import GenerationRecord, JobRecord, ParetoPointRecord
+from services.store.sql import COUNT_CAP
 from services.store.tables import JobStatus
 
 
@@ -127,6 +128,16 @@ class ParetoPointOut(BaseModel):
     @classmethod
     def from_record(cls, p: ParetoPointRecord) -> ParetoPointOut:
         return cls(index=p.index, x=p.x, objectives=p.objectives)
+
+
+class JobPage(Page[JobOut]):
+    """A page of your jobs (``GET /jobs``)."""
+
+    total: int = Field(
+        description=f"Jobs matching the filters (all pages), counted up to {COUNT_CAP + 1}: "
+        f"{COUNT_CAP + 1} means more than {COUNT_CAP} (an exact count would cost more than "
+        "the page as the store grows)."
+    )
 
 
 class ParetoPage(Page[ParetoPointOut]):

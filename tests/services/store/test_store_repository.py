@@ -34,6 +34,7 @@ from services.store import (
     list_jobs,
     list_robots,
     list_sweeps,
+    repository,
     session_scope,
 )
 from services.store.tables import JOBS
@@ -128,6 +129,14 @@ def test_jobs_create_get_list_paginate(engine: Engine) -> None:
         assert list_jobs(s, owner_key_id=bob.id).items[0].warnings == [
             "robot is near a singularity"
         ]
+        # the total is counted up to COUNT_CAP + 1 ("more than"), not over every row
+        assert list_jobs(s, owner_key_id=alice.id, limit=1).total == 5
+    with session_scope(engine) as s, pytest.MonkeyPatch.context() as mp:
+        mp.setattr(repository, "COUNT_CAP", 3)
+        page = list_jobs(s, owner_key_id=alice.id, limit=2)
+        assert page.total == 4 and len(page.items) == 2  # 4 = COUNT_CAP + 1: more than 3
+        assert list_jobs(s, owner_key_id=alice.id, limit=2, offset=4).items == (jobs[0],)
+    with session_scope(engine) as s:
         with pytest.raises(ValueError):
             list_jobs(s, limit=0)
         with pytest.raises(ValueError):
