@@ -7,10 +7,12 @@ It is set in the transaction that creates the job (``repository.create_jobs``) o
 Whoever sends — the API right after its commit, or the elected dispatcher — first *claims the
 send* with one conditional UPDATE (``claim_sends``): it moves ``dispatch_due_at`` to the next
 re-send time and counts the message, so one message goes out per due time, never one per
-process per pass. The next re-send time backs off (``backoff_s[count]``): a job that waits
-behind busy workers gets a few duplicates in all, which are harmless (the claim decides).
-A message that was lost (killed worker, broker restart) is re-sent early when the broker holds
-fewer messages than there are queued jobs (``stale_before`` / ``stale_limit``).
+process per pass. The next re-send time backs off (``backoff_s[count]``), but timed re-sends
+go out only where the broker cannot say how many messages it holds (``resend``). Where it
+can, a job waiting behind busy workers gets no duplicate at all, and a message that was lost
+(killed worker, broker restart) is re-sent when the broker holds fewer messages than there
+are queued jobs sent (``stale_before`` / ``stale_limit``). ``dispatch_count`` counts the
+messages of the job's current wait in the queue: a requeue starts it again at 0.
 
 A *service lease* elects one holder of a named role (``try_lead``), so one dispatcher runs at
 a time among all workers and servers.
@@ -63,6 +65,7 @@ def claim_sends(
     job_ids: Sequence[str] | None = None,
     stale_before: datetime | None = None,
     stale_limit: int = 0,
+    resend: bool = True,
     limit: int = 1000,
     actor: str | None = None,
     now: datetime | None = None,
@@ -70,8 +73,11 @@ def claim_sends(
     """Claim the sending of due messages; the ids whose message the caller must send now.
 
     Due: queued, not cancel-requested, ``dispatch_due_at <= now`` (restricted to ``job_ids``
-    when given). Also, up to ``stale_limit`` queued jobs last sent before ``stale_before``
-    (the broker holds fewer messages than queued jobs: theirs were lost), oldest send first.
+    when given); with ``resend`` False only the jobs not sent since they were queued
+    (``dispatch_count`` 0: new or requeued), so no timed re-send goes out while the caller
+    knows from the broker that no message is missing. Also, up to ``stale_limit`` queued jobs
+    last sent before ``stale_before`` (the broker holds fewer messages than queued jobs:
+    theirs were lost), oldest send first.
     Each claimed job's ``dispatch_due_at`` moves to ``now + backoff_s[dispatch_count]`` and its
     count grows by one, in one conditional UPDATE, so a concurrent sender cannot claim it too.
     The claimed jobs' ``dispatched`` events (by ``actor``, at ``now``) are recorded in the same
@@ -82,6 +88,8 @@ def claim_sends(
     now = now_utc(now)
     ids: list[str] = []
     due = select(JOBS.c.id).where(and_queued(JOBS.c.dispatch_due_at <= now))
+    if not resend:
+        due = due.where(JOBS.c.dispatch_count == 0)
     if job_ids is not None:
         if not job_ids:
             return []

@@ -8,11 +8,15 @@ a queue message until one is sent, and every send is claimed in the database fir
   due and the dispatcher sends them.
 - ``Dispatcher``: a thread in every worker process (and ``legopt serve``); through a service
   lease in the database only one of them works at a time. Each pass (every
-  ``dispatch_period_s``): requeue jobs whose lease expired (their worker died), send the due
-  messages, and re-send early the messages the broker lost: when the broker holds fewer
-  messages than there are queued jobs, the jobs sent longest ago (more than a lease ago) are
-  re-sent, at most that many. So a lost message is re-sent about once, not once per worker per
-  pass, and a queued job waits at most about a lease and a pass when a worker is idle.
+  ``dispatch_period_s``): requeue jobs whose lease expired (their worker died), send the
+  messages of new and requeued jobs, and re-send the messages the broker lost: when the broker
+  holds fewer messages than there are queued jobs sent, in two passes running (a message a
+  worker has just taken, its claim not yet committed, is missing for one pass only), the jobs
+  sent longest ago (more than a lease ago) are re-sent, at most that many. So a lost message
+  is re-sent about once, a job waiting behind busy workers is never re-sent (≤ 1.1 messages
+  per job over a 10⁴-job sweep), and a queued job waits at most about a lease and two passes
+  when a worker is idle. Where the broker cannot tell its depth, due jobs are re-sent on a
+  backoff of leases instead (``services.store.dispatch``).
 
 ``send`` and ``queue_depth`` are injected (Celery's in ``services.worker.tasks``), so nothing
 here imports Celery and the API can use ``send_now``.
@@ -67,6 +71,8 @@ class PassReport:
     failed: tuple[str, ...] = ()
     cancelled: tuple[str, ...] = ()
     broker_depth: int | None = None
+    #: Queued jobs sent whose message the broker did not hold at this pass (None: unknown).
+    shortfall: int | None = None
 
 
 Bind = sessionmaker[Session] | None
@@ -125,10 +131,12 @@ def dispatch_pass(
     settings: Settings | None = None,
     now: datetime | None = None,
     bind: Bind = None,
+    previous_shortfall: int | None = None,
 ) -> PassReport:
     """One pass of the dispatcher (see the module docstring); does nothing unless ``actor``
     holds (or takes) the dispatcher role. ``bind``: the session factory (default: the
-    process's)."""
+    process's). ``previous_shortfall``: the last pass's ``shortfall`` (lost messages are
+    re-sent only when two passes running found them missing)."""
     settings = settings or get_settings()
     now = now or datetime.now(UTC)
     ttl = max(3.0 * settings.dispatch_period_s, settings.lease_seconds / 2)
@@ -144,17 +152,20 @@ def dispatch_pass(
     report.broker_depth = depth
     stale_before, stale_limit = None, 0
     if depth is not None:
-        with session_scope(bind) as s:
-            missing = queued_sent_count(s) - depth
-        if missing > 0:
+        with session_scope(bind) as s:  # counted after the depth: a claim between the two
+            missing = max(0, queued_sent_count(s) - depth)  # makes it smaller, not larger
+        report.shortfall = missing
+        confirmed = min(missing, previous_shortfall or 0)
+        if confirmed > 0:
             stale_before = now - timedelta(seconds=settings.lease_seconds)
-            stale_limit = missing
+            stale_limit = confirmed
     with session_scope(bind, immediate=True) as s:
         ids = claim_sends(
             s,
             backoff_s=backoff_schedule(settings.lease_seconds),
             stale_before=stale_before,
             stale_limit=stale_limit,
+            resend=depth is None,
             actor=actor,
             now=now,
         )
@@ -192,9 +203,14 @@ class Dispatcher(threading.Thread):
         self._stop_event = threading.Event()
 
     def run(self) -> None:
+        shortfall: int | None = None
         while not self._stop_event.wait(self.settings.dispatch_period_s):
             try:
-                dispatch_pass(self.send, self.queue_depth, actor=self.actor, settings=self.settings)
+                report = dispatch_pass(
+                    self.send, self.queue_depth, actor=self.actor, settings=self.settings,
+                    previous_shortfall=shortfall,
+                )  # fmt: skip
+                shortfall = report.shortfall
             except Exception:
                 log.exception("dispatcher pass failed (retrying next period)")
         try:

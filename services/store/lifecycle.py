@@ -600,6 +600,7 @@ def requeue_expired(
             "lease_owner": None,
             "lease_expires_at": None,
             "dispatch_due_at": now,
+            "dispatch_count": 0,  # a new wait in the queue: its message is due (dispatch)
         },
     )
     add_events(
