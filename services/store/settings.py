@@ -80,7 +80,7 @@ class Settings(BaseModel):
         description="Where artifacts are stored: '' the local directory artifact_dir; "
         "'s3://bucket/prefix' an S3-compatible object store (endpoint: s3_endpoint_url; "
         "credentials and region: boto3's usual chain, e.g. AWS_ACCESS_KEY_ID, "
-        "AWS_SECRET_ACCESS_KEY, AWS_REGION).",
+        "AWS_SECRET_ACCESS_KEY, AWS_DEFAULT_REGION).",
     )
     s3_endpoint_url: str = Field(
         default="",

@@ -9,7 +9,7 @@ kept (one ``HeadObject``) with the recorded one, and hashes the object's bytes w
 kept none; ``read``, ``open`` and ``local_copy`` hash what they download.
 
 The client is boto3's, with its usual configuration chain for credentials and region
-(``AWS_ACCESS_KEY_ID``/``AWS_SECRET_ACCESS_KEY``, ``AWS_PROFILE``, ``AWS_REGION``, instance
+(``AWS_ACCESS_KEY_ID``/``AWS_SECRET_ACCESS_KEY``, ``AWS_PROFILE``, ``AWS_DEFAULT_REGION``, instance
 roles, ...); the endpoint is ``LEGOPT_S3_ENDPOINT_URL``, else boto3's own
 (``AWS_ENDPOINT_URL_S3``/``AWS_ENDPOINT_URL``, else AWS). A missing object raises
 ``ArtifactMissingError``; an unreachable store (network, 5xx, credentials, no such bucket)
