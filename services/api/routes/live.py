@@ -1,7 +1,8 @@
 """A running job, live: its current front (the last stored generation's) and a stream of
 Server-Sent Events that says when it changed, so the job page redraws within a second of a new
 generation instead of polling. Pages that cannot hold a stream (or are refused one: at most
-``MAX_STREAMS`` per API process) poll as before."""
+``MAX_STREAMS`` per API process) poll as before. A sweep has a stream too: its jobs' counts
+per status and its progress, so the sweep page updates the same way."""
 
 from __future__ import annotations
 
@@ -164,6 +165,123 @@ async def job_events(job_id: str, key: CurrentKey, ctx: Context) -> StreamingRes
         )
     return StreamingResponse(
         _events(ctx, job.id),
+        media_type="text/event-stream",
+        headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
+    )
+
+
+# --------------------------------------------------------------------------- a sweep, live
+
+
+def _sweep_state(ctx: ApiContext, sweep_id: str, owner_key_id: str) -> dict[str, Any] | None:
+    """The sweep's jobs per status and its progress (the mean of its jobs' fractions of
+    generations done, a succeeded job counting 1), in one grouped query; None: no such sweep."""
+    from sqlalchemy import Float, case, cast, func, select
+
+    from services.api.schemas import sweep_state
+    from services.store.tables import JOBS, JobStatus
+
+    fraction = case(
+        (JOBS.c.total_generations > 0,
+         cast(JOBS.c.progress_generation, Float) / JOBS.c.total_generations),
+        else_=0.0,
+    )  # fmt: skip
+    stmt = (
+        select(
+            JOBS.c.status,
+            func.count(),
+            func.coalesce(func.sum(JOBS.c.progress_generation), 0),
+            func.coalesce(func.sum(JOBS.c.total_generations), 0),
+            func.coalesce(func.sum(fraction), 0.0),
+        )
+        .where(JOBS.c.sweep_id == sweep_id, JOBS.c.owner_key_id == owner_key_id)
+        .group_by(JOBS.c.status)
+    )
+    with ctx.read() as session:
+        if repo.get_sweep(session, sweep_id, owner_key_id=owner_key_id) is None:
+            return None
+        rows = session.execute(stmt).all()
+    counts = {s: 0 for s in JobStatus}
+    generation = total = 0
+    done = 0.0
+    for status_, n, gens, totals, fractions in rows:
+        st = JobStatus(status_)
+        counts[st] = int(n)
+        generation += int(gens)
+        total += int(totals)
+        done += float(n) if st is JobStatus.SUCCEEDED else min(float(fractions), float(n))
+    n_jobs = sum(counts.values())
+    state = sweep_state(counts)
+    return {
+        "state": state,
+        "n_jobs": n_jobs,
+        "counts": {s.value: n for s, n in counts.items()},
+        "generation": generation,
+        "total_generations": total,
+        "progress": round(done / n_jobs, 6) if n_jobs else 0.0,
+        "terminal": state in ("finished", "empty"),
+    }
+
+
+async def _sweep_events(ctx: ApiContext, sweep_id: str, owner_key_id: str) -> AsyncIterator[bytes]:
+    """``progress`` events (JSON: state, counts, progress) on every change, until the sweep
+    is finished (every job terminal)."""
+    loop = asyncio.get_running_loop()
+    started = last_sent = loop.time()
+    previous: dict[str, Any] | None = None
+    _open.add(1)
+    try:
+        yield f"retry: {int(1000 * POLL_S * 4)}\n\n".encode()
+        while loop.time() - started < ctx.settings.event_stream_s:
+            state = await run_in_threadpool(_sweep_state, ctx, sweep_id, owner_key_id)
+            if state is None:  # deleted meanwhile
+                yield b"event: gone\ndata: {}\n\n"
+                return
+            if state != previous:
+                previous = state
+                last_sent = loop.time()
+                yield f"event: progress\ndata: {json.dumps(state)}\n\n".encode()
+                if state["terminal"]:
+                    return
+            elif loop.time() - last_sent >= KEEPALIVE_S:
+                last_sent = loop.time()
+                yield b": keep-alive\n\n"
+            await asyncio.sleep(POLL_S)
+    finally:
+        _open.add(-1)
+
+
+@router.get(
+    "/sweeps/{sweep_id}/events",
+    response_class=StreamingResponse,
+    summary="Server-Sent Events: the sweep's job counts and progress, pushed as they change",
+    responses={
+        200: {"content": {"text/event-stream": {}}, "description": "`progress` events."},
+        404: {"model": ErrorOut, "description": "No such sweep (among yours)."},
+        429: {"model": ErrorOut, "description": "Too many streams open: poll instead."},
+    },
+)
+async def sweep_events(sweep_id: str, key: CurrentKey, ctx: Context) -> StreamingResponse:
+    """An ``event: progress`` (``{"state", "n_jobs", "counts", "generation",
+    "total_generations", "progress", "terminal"}``: ``counts`` per job status, ``generation``
+    and ``total_generations`` summed over the jobs, ``progress`` the mean of the jobs' fractions
+    done) when the stream opens and whenever one of them changes; the stream ends after the
+    event of the finished sweep (or after ``event_stream_s`` of the settings: reconnect). The
+    limit of open streams is shared with the jobs' streams."""
+    from services.api.errors import not_found
+
+    with ctx.read() as session:
+        sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
+        if sweep is None:
+            raise not_found("sweep", sweep_id)
+    if _open.n >= MAX_STREAMS:
+        raise HTTPException(
+            status.HTTP_429_TOO_MANY_REQUESTS,
+            f"{MAX_STREAMS} event streams are open on this server: poll GET /sweeps/{sweep.id}",
+            headers={"Retry-After": "5"},
+        )
+    return StreamingResponse(
+        _sweep_events(ctx, sweep.id, key.id),
         media_type="text/event-stream",
         headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
     )

@@ -4,16 +4,19 @@
 // objectives, metrics and decision variables, metrics, spec, downloads. Once it succeeded, its
 // verdict first: red with each violated constraint and by how much when the reported optimum
 // is infeasible, green when it meets every constraint; and the task it ran (the rule that
-// derived each robot-relative parameter from its robot).
-import { api, download, follow } from "../api.js";
+// derived each robot-relative parameter from its robot). Beside the trials, each variable's
+// importance for each objective. The head has the job's actions (Delete among them).
+import { api, download } from "../api.js";
+import { keepCurrent } from "../live.js";
 import { convergencePlot, jointPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
-import { bar, best, clear, errorText, fill, h, jobBadge, num, shortId, TERMINAL, violationText, when } from "../ui.js";
-import { rerun } from "./jobs.js";
+import { bar, best, clear, errorText, fill, h, num, shortId, TERMINAL, violationText, when } from "../ui.js";
 import { frontSteering } from "./job_front.js";
+import { jobHead } from "./job_head.js";
+import { importanceCard } from "./job_importance.js";
+import { drawMetrics } from "./job_metrics.js";
 import { trialsCard } from "./job_trials.js";
 
-/** @typedef {import("../api_types").EarnedStart} EarnedStart */
 /** @typedef {import("../api_types").FrontOut} FrontOut */
 /** @typedef {import("../api_types").GapOut} GapOut */
 /** @typedef {import("../api_types").GenerationOut} GenerationOut */
@@ -40,8 +43,6 @@ const METRICS_RETRY_MS = 3000;
  */
 export async function render(main, jobId) {
   let alive = true;
-  /** @type {number | undefined} */
-  let timer;
   const head = h("div");
   const verdict = h("div#verdict");
   const progress = h("div.card");
@@ -54,6 +55,7 @@ export async function render(main, jobId) {
   const metrics = h("div.card#metrics");
   const spec = h("div.card");
   const trials = trialsCard(jobId, (t) => pick({ kind: "trial", index: t }));
+  const importance = importanceCard(jobId);
   const steer = frontSteering(frontControls, frontEl, (sel) => pick(sel));
   /** @type {JobDetail | null} */
   let current = null;
@@ -82,33 +84,12 @@ export async function render(main, jobId) {
         on: { click: () => download(`/jobs/${jobId}/history/export?format=${f}`, `history.${f}`) } }, `history ${f.toUpperCase()}`))),
       h("div.scroll", frontTable)),
     h("div.row", h("div.grow", motionCard), h("div.card.grow", h("h2", "Rerun recording"), viewer.el)),
-    trials.el, metrics, spec);
+    trials.el, importance.el, metrics, spec);
 
   // Live: the server pushes an event when the job's generation or status changes; the page
   // redraws then. Where the stream cannot be opened (or breaks), the page polls.
-  let streaming = false;
-  let streamFailed = false;
-  const stream = new AbortController();
-  let refreshing = false;
-  let again = false;
-
-  function startStream() {
-    if (streaming || streamFailed || !alive) return;
-    streaming = true;
-    follow(`/jobs/${jobId}/events`, (name) => { if (name === "progress") refreshSoon(); }, stream.signal)
-      .then(() => { streaming = false; if (alive && current && !TERMINAL.has(current.status)) startStream(); })
-      .catch(() => { streaming = false; streamFailed = true; if (alive) refreshSoon(); });
-  }
-
-  // One refresh at a time; events that arrive meanwhile make one more.
-  function refreshSoon() {
-    if (refreshing) { again = true; return; }
-    refreshing = true;
-    refresh().catch(() => {}).finally(() => {
-      refreshing = false;
-      if (again && alive) { again = false; refreshSoon(); }
-    });
-  }
+  const following = keepCurrent(`/jobs/${jobId}/events`, refresh, { pollMs: POLL_MS, safetyMs: SAFETY_POLL_MS });
+  const actions = jobHead(head, () => following.refresh());
 
   // The running job's current front (objective vectors of its last stored generation).
   async function drawLiveFront() {
@@ -117,13 +98,13 @@ export async function render(main, jobId) {
     if (alive && !front) steer.drawLive(live);
   }
 
+  /** @returns {Promise<boolean>} whether the job has finished */
   async function refresh() {
-    clearTimeout(timer);
     /** @type {JobDetail} */
     const job = await api(`/jobs/${jobId}`);
-    if (!alive) return;
+    if (!alive) return true;
     current = job;
-    drawHead(job);
+    actions.draw(job);
     drawVerdict(job);
     drawProgress(job);
     /** @type {GenerationPage} */
@@ -133,13 +114,12 @@ export async function render(main, jobId) {
     if (generations.length) convergencePlot(conv, generations, front ? front.objectives : objectivesOf(generations));
     if (page.items.length || !TERMINAL.has(job.status) || lastGen === null) await trials.refresh();
     if (TERMINAL.has(job.status)) {
-      stream.abort();
+      importance.finished();
       if (job.status === "succeeded" && !front) await loadResult(job);
-    } else {
-      await drawLiveFront().catch(() => {});
-      startStream();
-      timer = setTimeout(() => refreshSoon(), streaming ? SAFETY_POLL_MS : POLL_MS);
+      return true;
     }
+    await drawLiveFront().catch(() => {});
+    return false;
   }
 
   /**
@@ -151,19 +131,6 @@ export async function render(main, jobId) {
     const b = gens[0] && gens[0].best;
     const m = Array.isArray(b) ? b.length : 1;
     return Array.from({ length: m }, (_, j) => ({ name: `f${j + 1}`, label: `f${j + 1}`, unit: "", axis: `f${j + 1}` }));
-  }
-
-  /** @param {JobDetail} job */
-  function drawHead(job) {
-    fill(head, h("div.toolbar",
-      h("h1", job.name || `Job ${shortId(job.id)}`), jobBadge(job),
-      job.sweep_id ? h("a", { href: `#/sweep/${job.sweep_id}` }, `sweep ${shortId(job.sweep_id)}`) : null,
-      h("span.spacer"),
-      !TERMINAL.has(job.status) ? h("button.danger", { dataset: { action: "cancel" }, on: { click: async () => {
-        await api(`/jobs/${job.id}/cancel`, { method: "POST" }); refresh(); } } }, "Cancel") : null,
-      h("button.secondary", { dataset: { action: "rerun" }, on: { click: async () => { location.hash = `#/job/${(await rerun(job.id)).id}`; } } }, "Re-run (new seed)"),
-      h("button.secondary", { dataset: { export: "spec" }, on: { click: () => download(`/jobs/${job.id}/spec.yaml`, "spec.yaml") } }, "Spec YAML"),
-      job.status === "succeeded" ? h("button.secondary", { on: { click: () => download(`/jobs/${job.id}/recording`, "job.rrd") } }, "Recording .rrd") : null));
   }
 
   // The verdict of a succeeded job (GET /jobs/{id}: feasible, violations); the task's rules
@@ -245,7 +212,7 @@ export async function render(main, jobId) {
     if (generations.length) convergencePlot(conv, generations, front.objectives);
     drawFront();
     drawFrontTable(front);
-    drawMetrics(front, result);
+    drawMetrics(metrics, front, result);
     if (front.point_metrics === "pending") metricsTimer = setTimeout(() => reloadPointMetrics(job).catch(() => {}), METRICS_RETRY_MS);
     const first = front.best_index ?? (front.points[0] && front.points[0].index);
     if (first !== undefined && first !== null) pick({ kind: "point", index: first });
@@ -321,59 +288,6 @@ export async function render(main, jobId) {
     return row;
   }
 
-  /**
-   * @param {FrontOut} front
-   * @param {ResultOut} result
-   */
-  function drawMetrics(front, result) {
-    const labels = Object.fromEntries(front.metrics.map((q) => [q.name, q]));
-    const paper = front.paper ? front.paper.metrics : null;
-    /** @param {string} k */
-    const paperCell = (k) => {
-      const pv = paper && paper[k];
-      if (!pv) return h("td.num.muted", "—");
-      const text = `${pv.start === null ? "" : `${num(pv.start)} → `}${num(pv.optimum)}`;
-      return h("td.num", { title: [pv.symbol && `paper: ${pv.symbol}`, pv.note].filter(Boolean).join(" — ") }, text);
-    };
-    const rows = Object.entries(result.metrics || {}).map(([k, v]) => {
-      const q = labels[k] || { label: k, unit: "" };
-      return h("tr", h("td", q.label), h("td.mono.muted", k), h("td.num", num(v)), h("td", q.unit),
-        paper ? paperCell(k) : null, front.baselines.map((b) => h("td.num", num(b.metrics[k]))));
-    });
-    fill(metrics, earnedBlock(result), h("h2", "Metrics of the reported optimum"),
-      h("table#metrics-table", h("thead", h("tr", h("th", "metric"), h("th", "name"), h("th.num", "optimum"), h("th", "unit"),
-        paper ? h("th.num", { title: front.paper?.source }, "paper: start → optimum") : null,
-        front.baselines.map((b) => baselineHead(b.name, result)))), h("tbody", rows)));
-  }
-
-  // A baseline's column: its name, and "infeasible" in red when it violates a constraint on
-  // this robot (a change against it would mean nothing).
-  /**
-   * @param {string} name
-   * @param {ResultOut} result
-   */
-  function baselineHead(name, result) {
-    const rec = (result.baselines || []).find((x) => x.name === name);
-    if (!rec || rec.feasible !== false) return h("th.num", `baseline ${name}`);
-    return h("th.num", { title: rec.violations.map(violationText).join("; ") }, `baseline ${name} `,
-      h("span.error", "(infeasible)"));
-  }
-
-  // What the optimiser earned: its initial population's best and the solution the encoding
-  // gives with no search (summary.start, legcore/earned.py) beside the optimum.
-  /** @param {ResultOut} result */
-  function earnedBlock(result) {
-    /** @type {EarnedStart | null | undefined} */
-    const st = result.summary?.start;
-    if (!st || !st.objectives) return null;
-    const rows = st.objectives.map((r) => h("tr", h("td.mono", r.objective), h("td.num", num(r.initial)),
-      h("td.num", num(r.free)), h("td.num", num(r.optimum)), h("td.num", r.earned_pct == null ? "" : `${num(r.earned_pct)} %`)));
-    return h("section#earned", h("h2", "What the optimiser earned"), h("p", st.verdict),
-      h("table", h("thead", h("tr", h("th", "objective (minimised)"), h("th.num", "initial population's best"),
-        h("th.num", st.free ? `${st.free.what} (no search)` : "no-search solution"), h("th.num", "optimum"),
-        h("th.num", "earned over the initial best"))), h("tbody", rows)));
-  }
-
   /** @param {Selection} sel */
   async function pick(sel) {
     if (!front && !(sel.kind === "trial" && current && current.status === "succeeded")) return;
@@ -420,6 +334,6 @@ export async function render(main, jobId) {
     jointPlot(plot, motion, signal);
   }
 
-  await refresh();
-  return () => { alive = false; stream.abort(); clearTimeout(timer); clearTimeout(metricsTimer); plots.forEach(purge); };
+  await following.first();
+  return () => { alive = false; following.stop(); clearTimeout(metricsTimer); plots.forEach(purge); };
 }

@@ -1,16 +1,31 @@
 // One sweep: the grid as a table of cells (mean ± sd over seeds of every objective, metric and
 // the hypervolume; the best cell of each objective highlighted), the fronts of the chosen
-// cells overlaid in distinct colours, and a link into each job.
+// cells overlaid in distinct colours, and a link into each job. Live while it runs: the
+// server pushes the sweep's job counts and progress (GET /sweeps/{id}/events) and the page
+// redraws the progress at once and the cells when a job has finished; where the stream cannot
+// be opened, it polls.
 import { api, download } from "../api.js";
+import { keepCurrent } from "../live.js";
 import { COLORS, overlayPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
-import { fill, h, num, shortId } from "../ui.js";
+import { badge, bar, fill, h, num, shortId } from "../ui.js";
 
 /** @typedef {import("../api_types").SweepCellsOut} SweepCellsOut */
 /** @typedef {import("../api_types").SweepFrontsOut} SweepFrontsOut */
 /** @typedef {import("../api_types").SweepOut} SweepOut */
+/**
+ * What GET /sweeps/{id}/events pushes (`progress`): the jobs per status, the generations done
+ * and planned summed over the jobs, the mean fraction done; `terminal` once every job finished.
+ * @typedef {{ state: string, n_jobs: number, counts: Record<string, number>, generation?: number,
+ *   total_generations?: number, progress?: number, terminal?: boolean }} SweepProgress
+ */
 
 const POLL_MS = 3000;
+// While the server pushes the sweep's progress, a slow poll only in case.
+const SAFETY_POLL_MS = 15000;
+
+/** @param {Record<string, number>} counts @returns {string} the counts, comparable */
+const countsKey = (counts) => Object.keys(counts).sort().map((k) => `${k}=${counts[k]}`).join(",");
 
 /**
  * One sweep's page (#/sweep/ID) into `main`; its cleanup.
@@ -20,11 +35,14 @@ const POLL_MS = 3000;
  */
 export async function render(main, sweepId) {
   let alive = true;
-  /** @type {number | undefined} */
-  let timer;
   const table = h("table#cells-table");
   const plot = h("div.plot#overlay-plot");
   const summary = h("p.muted");
+  const progress = h("div#sweep-progress");
+  /** @type {string | null} the job counts the cells were drawn for */
+  let loadedCounts = null;
+  /** @type {SweepProgress | null} the last pushed progress not yet acted on */
+  let pushed = null;
   /** @type {Set<number>} the cells whose fronts are drawn */
   const chosen = new Set();
   const viewerBox = h("div");
@@ -38,7 +56,7 @@ export async function render(main, sweepId) {
       h("a", { href: `#/jobs?sweep_id=${sweepId}` }, "its jobs"),
       ...["csv", "parquet", "json"].map((f) => h("button.secondary", { dataset: { export: `cells-${f}` },
         on: { click: () => download(`/sweeps/${sweepId}/cells/export?format=${f}`, `cells.${f}`) } }, `cells ${f.toUpperCase()}`))),
-    summary,
+    summary, progress,
     h("div.card", h("h2", "Cells (mean ± sd over seeds)"), h("div.scroll.full", table)),
     h("div.card", h("h2", "Fronts of the chosen cells"), h("p.muted", "Tick cells in the table; click a point to open its job."), plot),
     h("div.card", h("div.toolbar", h("h2", "Recordings of the chosen cells, merged"), h("span.spacer"),
@@ -51,11 +69,32 @@ export async function render(main, sweepId) {
     viewer.open(`/sweeps/${sweepId}/recording?${ids.map((i) => `jobs=${i}`).join("&")}`, `sweep ${shortId(sweepId)}`);
   }
 
+  /** @param {SweepProgress} p */
+  function drawProgress(p) {
+    const done = ["succeeded", "failed", "cancelled"].reduce((t, k) => t + (p.counts[k] || 0), 0);
+    const fraction = p.progress ?? (p.n_jobs ? done / p.n_jobs : 0);
+    const gens = p.total_generations ? ` · generation ${p.generation} of ${p.total_generations} over the jobs` : "";
+    progress.dataset.state = p.state;
+    progress.dataset.generation = String(p.generation ?? "");
+    fill(progress, h("p", bar(fraction, `${done} of ${p.n_jobs} jobs finished${gens}`), " ",
+      Object.entries(p.counts).filter(([, n]) => n > 0).map(([k, n]) => [badge(k), ` ${n} `])));
+  }
+
+  // A pushed event redraws the progress at once; the cells and fronts only change when a job
+  // finishes, so they are reloaded when the counts changed (and on every poll).
+  /** @returns {Promise<boolean>} whether the sweep has finished */
+  async function refresh() {
+    const p = pushed;
+    pushed = null;
+    if (p && !p.terminal && countsKey(p.counts) === loadedCounts) return false;
+    return load();
+  }
+
+  /** @returns {Promise<boolean>} whether the sweep has finished */
   async function load() {
-    clearTimeout(timer);
     const [sweep, c] = await Promise.all([/** @type {Promise<SweepOut>} */ (api(`/sweeps/${sweepId}?limit=1`)),
       /** @type {Promise<SweepCellsOut>} */ (api(`/sweeps/${sweepId}/cells`))]);
-    if (!alive) return;
+    if (!alive) return true;
     cells = c;
     summary.textContent = `${sweep.n_jobs} jobs, ${sweep.state}; swept: ${c.columns.join(", ") || "seeds only"}` +
       (c.hypervolume_ref ? `; hypervolumes against the sweep-wide reference point (${c.hypervolume_ref.map((v) => num(v)).join(", ")})` : "");
@@ -63,7 +102,10 @@ export async function render(main, sweepId) {
     drawTable();
     await drawFronts();
     plot.dataset.sweepState = sweep.state; // table and fronts drawn for this state
-    if (sweep.state !== "finished") timer = setTimeout(() => load().catch(() => {}), POLL_MS);
+    loadedCounts = countsKey(sweep.counts);
+    // the pushed progress has the generations too: keep it while the stream is open
+    if (!live.streaming()) drawProgress(sweep);
+    return sweep.state === "finished" || sweep.state === "empty";
   }
 
   function drawTable() {
@@ -103,6 +145,15 @@ export async function render(main, sweepId) {
     drawTable();
   }
 
-  await load();
-  return () => { alive = false; clearTimeout(timer); purge(plot); };
+  const live = keepCurrent(`/sweeps/${sweepId}/events`, refresh, {
+    pollMs: POLL_MS,
+    safetyMs: SAFETY_POLL_MS,
+    onEvent: (name, data) => {
+      if (name !== "progress" || !alive) return;
+      pushed = /** @type {SweepProgress} */ (data);
+      drawProgress(pushed);
+    },
+  });
+  await live.first();
+  return () => { alive = false; live.stop(); purge(plot); };
 }
