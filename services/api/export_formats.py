@@ -25,6 +25,7 @@ __all__ = [
     "FORMATS",
     "MEDIA_TYPES",
     "ExportFormat",
+    "FILENAME_PATTERN",
     "Units",
     "csv_cell",
     "encode",
@@ -152,6 +153,12 @@ def encode(
     raise ValueError(f"format: expected one of {', '.join(FORMATS)}, got {fmt!r}")
 
 
-def filename(stem: str, fmt: str) -> str:
-    """``stem.fmt`` (the download's name)."""
-    return f"{stem}.{fmt}"
+#: How every export's file is named: ``legopt-<what>-<id8>.<format>`` (``id8``: the first 8
+#: characters of the job or sweep id; the job list has none: ``legopt-jobs.csv``).
+FILENAME_PATTERN = "legopt-<what>-<id8>.<format>"
+
+
+def filename(what: str, fmt: str, ident: str | None = None) -> str:
+    """The download's name (:data:`FILENAME_PATTERN`): ``legopt-front-1a2b3c4d.csv`` for
+    ``what="front"`` of job ``1a2b3c4d-…``, ``legopt-jobs.parquet`` without ``ident``."""
+    return f"legopt-{what}-{ident[:8]}.{fmt}" if ident else f"legopt-{what}.{fmt}"

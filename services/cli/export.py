@@ -1,10 +1,16 @@
 """`legopt export`: the dashboard's downloads from the command line — the job list, a job's
-front or history, a sweep's cell table — as CSV, JSON or Parquet, from a running service.
+front or history, a sweep's cell table or its jobs one row each — as CSV, JSON or Parquet, from
+a running service. Ids and ``--sweep`` take a prefix (unknown or ambiguous: exit 2 naming it);
+a ``--robot`` that names no robot is exit 2 too (the API's 422). Without ``--out`` the file is
+saved under the server's name, ``legopt-<what>-<id8>.<format>`` (the job list:
+``legopt-jobs.<format>``).
 
     legopt export jobs --status succeeded --kind path_tracking --format parquet
+    legopt export jobs --sweep 2253                     # legopt-jobs.csv
     legopt export front JOB --out front.csv
     legopt export history JOB --format json --out -      # to standard output
-    legopt export cells SWEEP
+    legopt export cells SWEEP                           # legopt-cells-<id8>.csv
+    legopt export sweep-jobs SWEEP --format parquet      # legopt-sweep-jobs-<id8>.parquet
 """
 
 from __future__ import annotations
@@ -20,8 +26,8 @@ import typer
 from services.cli.common import KeyOpt, UrlOpt, api_call, client, console, resolve_id
 
 export_app = typer.Typer(
-    help="Download the job list, a job's front or history, or a sweep's cells (CSV, JSON, "
-    "Parquet).",
+    help="Download the job list, a job's front or history, or a sweep's cells or jobs (CSV, "
+    "JSON, Parquet), as legopt-<what>-<id8>.<format>.",
     no_args_is_help=True,
 )
 
@@ -38,11 +44,16 @@ FormatOpt = Annotated[Format, typer.Option("--format", "-f", help="csv, json or 
 OutOpt = Annotated[
     Path | None,
     typer.Option("--out", "-o", help="file to write ('-': standard output; default: the "
-                 "server's file name in the current directory)"),
+                 "server's file name, legopt-<what>-<id8>.<format>, in the current directory)"),
 ]  # fmt: skip
 
 
-def _save(c: Any, path: str, params: dict[str, Any], out: Path | None) -> None:
+def _save(
+    c: Any, path: str, params: dict[str, Any], out: Path | None, what: str, ident: str | None
+) -> None:
+    """GET ``path`` and write the file to ``out`` (``-``: standard output; None: the name the
+    server gives in the current directory, else the same pattern's
+    ``legopt-<what>-<first 8 of ident>.<format>``)."""
     response = api_call(c._req, "GET", path, params=params)
     data = response.content
     if out is not None and str(out) == "-":
@@ -50,8 +61,11 @@ def _save(c: Any, path: str, params: dict[str, Any], out: Path | None) -> None:
         sys.stdout.buffer.flush()
         return
     if out is None:
+        from services.api.export_formats import filename
+
         m = re.search(r'filename="?([^";]+)"?', response.headers.get("content-disposition", ""))
-        out = Path(m.group(1) if m else Path(path).name)
+        name = Path(m.group(1)).name if m else ""  # in the current directory, whatever it says
+        out = Path(name or filename(what, params["format"], ident))
     out.write_bytes(data)
     console.print(f"saved {out} ({len(data)} bytes)")
 
@@ -65,17 +79,27 @@ def export_jobs(
     ] = None,
     kind: Annotated[str | None, typer.Option(help="only this study kind")] = None,
     optimizer: Annotated[str | None, typer.Option(help="only this optimizer")] = None,
-    robot: Annotated[str | None, typer.Option(help="only this robot")] = None,
-    sweep: Annotated[str | None, typer.Option(help="only the jobs of this sweep")] = None,
+    robot: Annotated[
+        str | None, typer.Option(help="only this robot (catalog, yours or your jobs')")
+    ] = None,
+    sweep: Annotated[
+        str | None, typer.Option(help="only the jobs of this sweep (id or prefix)")
+    ] = None,
     search: Annotated[str | None, typer.Option("--search", "-q", help="words to match")] = None,
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:
-    """Your job list (the dashboard's filters), newest first."""
-    params = {"format": format.value, "status": status or None, "kind": kind,
-              "optimizer": optimizer, "robot": robot, "sweep_id": sweep, "q": search}  # fmt: skip
+    """Your job list (the dashboard's filters), newest first; the best value so far of each
+    job's first objective with its quantity and unit. An unknown --sweep prefix or --robot is
+    an error (exit 2), not an empty file."""
     with client(url, key) as c:
-        _save(c, "/export/jobs", {k: v for k, v in params.items() if v}, out)
+        sweep_id = None
+        if sweep is not None:
+            _, sweep_id = resolve_id(c, sweep, field="--sweep", collections=("sweeps",))
+        params = {"format": format.value, "status": status or None, "kind": kind,
+                  "optimizer": optimizer, "robot": robot, "sweep_id": sweep_id,
+                  "q": search}  # fmt: skip
+        _save(c, "/export/jobs", {k: v for k, v in params.items() if v}, out, "jobs", None)
 
 
 @export_app.command("front")
@@ -90,7 +114,7 @@ def export_front(
     decision variables."""
     with client(url, key) as c:
         _, full = resolve_id(c, job)
-        _save(c, f"/jobs/{full}/front/export", {"format": format.value}, out)
+        _save(c, f"/jobs/{full}/front/export", {"format": format.value}, out, "front", full)
 
 
 @export_app.command("history")
@@ -105,7 +129,8 @@ def export_history(
     hypervolume, time (several objectives: each front's minimum and its compromise point)."""
     with client(url, key) as c:
         _, full = resolve_id(c, job)
-        _save(c, f"/jobs/{full}/history/export", {"format": format.value}, out)
+        params = {"format": format.value}
+        _save(c, f"/jobs/{full}/history/export", params, out, "history", full)
 
 
 @export_app.command("cells")
@@ -119,7 +144,23 @@ def export_cells(
     """A sweep's cells: swept values, job counts, mean ± sd of every objective and metric."""
     with client(url, key) as c:
         _, full = resolve_id(c, sweep, field="SWEEP", collections=("sweeps",))
-        _save(c, f"/sweeps/{full}/cells/export", {"format": format.value}, out)
+        _save(c, f"/sweeps/{full}/cells/export", {"format": format.value}, out, "cells", full)
+
+
+@export_app.command("sweep-jobs")
+def export_sweep_jobs(
+    sweep: Annotated[str, typer.Argument(metavar="SWEEP", help="sweep id or prefix")],
+    format: FormatOpt = Format.csv,
+    out: OutOpt = None,
+    url: UrlOpt = None,
+    key: KeyOpt = None,
+) -> None:
+    """A sweep's jobs, one row each beside its cells: id, cell, swept values, seed, status,
+    then each objective, hypervolume and metric of its result (SI units)."""
+    with client(url, key) as c:
+        _, full = resolve_id(c, sweep, field="SWEEP", collections=("sweeps",))
+        params = {"format": format.value}
+        _save(c, f"/sweeps/{full}/jobs/export", params, out, "sweep-jobs", full)
 
 
 __all__ = ["export_app"]

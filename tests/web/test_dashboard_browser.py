@@ -403,6 +403,8 @@ def test_sweep_cells_robots_and_docs(page: Any, stack: Stack, shots: Path, tmp_p
     cells = _download(page, "[data-export=cells-csv]", tmp_path / "cells.csv")
     assert [r["optimizer.params.pop_size"] for r in cells] == ["24", "32"]
     assert all(r["succeeded"] == "2" and float(r["time_mean [s]"]) > 0 for r in cells)
+    jobs = _download(page, "[data-export=sweep-jobs-csv]", tmp_path / "sweep-jobs.csv")
+    assert sorted(r["cell"] for r in jobs) == ["0", "0", "1", "1"], jobs  # beside its cells
 
     page.goto(f"{stack.url}/#/robots")
     page.click("#robots-table tr[data-robot='articulated_5dof']")

@@ -1,5 +1,7 @@
 """Downloads as CSV, JSON or Parquet: the job list (with the jobs page's filters), a job's
-front and history, a sweep's cell table. ``legopt export`` calls the same routes."""
+front and history, a sweep's cell table and its jobs one row each. ``legopt export`` calls the
+same routes. Every download is named ``legopt-<what>[-<id8>].<format>``
+(:func:`services.api.export_formats.filename`)."""
 
 from __future__ import annotations
 
@@ -10,12 +12,13 @@ from fastapi import APIRouter, HTTPException, Query, status
 from fastapi.responses import StreamingResponse
 
 from services.api.convergence import ConvergenceRow, convergence
-from services.api.dashboard_schemas import BaselineMark
+from services.api.dashboard_schemas import BaselineMark, named_best
 from services.api.deps import ApiContext, Context, CurrentKey
+from services.api.errors import VALIDATION_ERROR_SCHEMA, invalid
 from services.api.export_formats import MEDIA_TYPES, ExportFormat, Units, encode, filename
-from services.api.lookups import Filters, cell_table, owned_job, sync_labels
+from services.api.export_tables import quantities, shown_keys, sweep_job_table, unit_of
+from services.api.lookups import Filters, cell_table, owned_job, study_kind, sync_labels
 from services.api.points import point_metrics
-from services.api.quantities import describe
 from services.api.schemas import ErrorOut, objective_names
 from services.api.sweep_cells import mean_sd
 from services.store import dashboard_queries as dq
@@ -32,37 +35,33 @@ _FILE: dict[int | str, dict[str, Any]] = {
 JOB_COLUMNS = (
     "id", "name", "kind", "robot", "optimizer", "seed", "tags", "status", "feasible",
     "violations", "sweep_id", "generation", "total_generations", "progress", "best",
-    "created_at", "started_at", "finished_at", "error",
+    "best_quantity", "best_unit", "created_at", "started_at", "finished_at", "error",
+)  # fmt: skip
+#: The job list's one quantity: each row names its own (the jobs are of several studies).
+JOB_UNITS: dict[str, tuple[str, str]] = {
+    "best": ("", "best value so far of the job's first objective, in its own sign (its "
+             "quantity: best_quantity, its unit: best_unit)"),
+    "progress": ("", "fraction of the generations done (0 to 1)"),
+}  # fmt: skip
+#: The sweep job export's columns between the swept values and the quantities, and after them.
+SWEEP_JOB_STATE = ("seed", "status", "feasible", "violations")
+SWEEP_JOB_TAIL = (
+    "generation", "total_generations", "created_at", "started_at", "finished_at", "error",
 )  # fmt: skip
 #: Jobs read per query while the job list streams.
 EXPORT_PAGE = 1000
 
 
 def _download(
-    fmt: str, stem: str, columns: Any, rows: Any, units: Units | None = None
+    fmt: str, what: str, ident: str | None, columns: Any, rows: Any, units: Units | None = None
 ) -> StreamingResponse:
+    """The table as a file named ``legopt-<what>[-<first 8 of ident>].<fmt>``."""
+    name = filename(what, fmt, ident)
     return StreamingResponse(
         encode(fmt, list(columns), rows, units),
         media_type=MEDIA_TYPES[fmt],
-        headers={"Content-Disposition": f'attachment; filename="{filename(stem, fmt)}"'},
+        headers={"Content-Disposition": f'attachment; filename="{name}"'},
     )
-
-
-def _unit(key: str, kind: str | None) -> tuple[str, str]:
-    """``(unit, label)`` of a result key (a ``neg_`` objective: of the quantity it negates)."""
-    from legcore.studies.metric_names import display_objective
-
-    d = describe(display_objective(key, None)[0], kind)
-    return d["unit"], d["label"]
-
-
-def _shown(names: list[str]) -> tuple[list[str], list[bool]]:
-    """The objectives' exported keys (``neg_<m>`` as ``<m>``: one sign per quantity, the
-    quantity's own) and which of them are flipped."""
-    from legcore.studies.metric_names import display_objective
-
-    shown = [display_objective(n, None)[0] for n in names]
-    return shown, [s != n for s, n in zip(shown, names, strict=True)]
 
 
 def _signed(values: Any, flip: list[bool]) -> list[Any]:
@@ -83,6 +82,41 @@ def _violations(raw: Any) -> list[dict[str, Any]]:
     return [v for v in raw if isinstance(v, dict)] if isinstance(raw, list) else []
 
 
+def _verdict(job: Any) -> str | None:
+    """The violations of a checked job in words (None when not checked)."""
+    return None if job.feasible is None else violations_text(_violations(job.violations))
+
+
+def _check_filters(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> None:
+    """422 naming the filter, rather than an empty file, for a ``sweep_id`` that is none of the
+    caller's sweeps (as any unknown id in a query) or a ``robot`` that no catalog entry, none of
+    the caller's robots (by name or id) and none of their jobs is called."""
+    from legcore.robots import catalog
+
+    with ctx.read() as session:
+        sweep_id = filters.sweep_id
+        if sweep_id and repo.get_sweep(session, sweep_id, owner_key_id=key_id) is None:
+            raise invalid(
+                ("query", "sweep_id"),
+                f"no sweep {sweep_id!r} among yours (a whole id: "
+                "GET /sweeps?id_prefix= finds one from a prefix)",
+            )
+        robot = filters.robot
+        if not robot or robot in catalog.names():
+            return
+        if repo.get_robot(session, robot, owner_key_id=key_id) is not None:
+            return
+        if repo.get_robot_by_name(session, owner_key_id=key_id, name=robot) is not None:
+            return
+        ran = dq.list_job_rows(session, key_id, dq.JobFilter(robot=robot), limit=1, count=False)
+        if not ran.items:
+            raise invalid(
+                ("query", "robot"),
+                f"no robot {robot!r} among the catalog, your robots or your jobs' robots "
+                "(GET /robots?include_catalog=true lists them)",
+            )
+
+
 def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tuple[Any, ...]]:
     """Every job matching ``filters``, newest first, read by keyset pages."""
     cursor: str | None = None
@@ -93,12 +127,13 @@ def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tu
             )
         for r in page.items:
             j = r.job
+            named = named_best(j.best_objective, j.facts, r.kind)
+            best = (named[0].value, named[0].name, named[0].unit) if named else (
+                _first(j.best_objective), None, None)  # fmt: skip
             yield (
                 j.id, r.name, r.kind, r.robot, r.optimizer, r.seed, ",".join(r.tags),
-                j.status.value, j.feasible,
-                None if j.feasible is None else violations_text(_violations(j.violations)),
-                j.sweep_id, j.progress_generation, j.total_generations,
-                round(j.progress, 6), _first(j.best_objective), j.created_at, j.started_at,
+                j.status.value, j.feasible, _verdict(j), j.sweep_id, j.progress_generation,
+                j.total_generations, round(j.progress, 6), *best, j.created_at, j.started_at,
                 j.finished_at, j.error_message,
             )  # fmt: skip
         if page.next_cursor is None:
@@ -107,18 +142,31 @@ def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tu
 
 
 @router.get(
-    "/export/jobs", summary="Your job list as CSV, JSON or Parquet", responses=_FILE,
+    "/export/jobs",
+    summary="Your job list as CSV, JSON or Parquet",
+    responses={
+        **_FILE,
+        422: {
+            "description": "A bad query, or a filter naming no sweep of yours (`query.sweep_id`) "
+            "or no robot (`query.robot`).",
+            "content": {"application/json": {"schema": VALIDATION_ERROR_SCHEMA}},
+        },
+    },
     response_class=StreamingResponse,
-)  # fmt: skip
+)
 def export_jobs(
     key: CurrentKey, ctx: Context, filters: Filters, format: FormatQuery = "csv"
 ) -> StreamingResponse:
     """Every job matching the jobs page's filters (newest first): labels, status, the verdict
     of a succeeded job (``feasible``: true / false, empty when not checked; ``violations``: each
     violated constraint with its amount and unit, in words, ``; ``-separated), progress, best
-    value so far (first objective) and times."""
+    value so far of the first objective in its own sign (``best``; the jobs are of several
+    studies, so each row names its quantity, ``best_quantity``, and SI unit, ``best_unit``)
+    and times. A ``sweep_id`` that is none of your sweeps, or a ``robot`` that names no robot
+    of the catalog, of yours or of your jobs, is a 422 naming it (not an empty file)."""
     sync_labels(ctx, key.id)
-    return _download(format, "jobs", JOB_COLUMNS, job_rows(ctx, key.id, filters))
+    _check_filters(ctx, key.id, filters)
+    return _download(format, "jobs", None, JOB_COLUMNS, job_rows(ctx, key.id, filters), JOB_UNITS)
 
 
 @router.get(
@@ -151,7 +199,7 @@ def export_front(
         )
     m = max((len(p.objectives or []) for p in points), default=len(names))
     names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
-    shown, flip = _shown(names)
+    shown, flip = shown_keys(names)
     n = max((len(p.x or []) for p in points), default=0)
     # a metric that is also an objective is the objective's column (one column per quantity)
     metrics = [k for k in dict.fromkeys(k for v in per_point.values() if v for k in v)
@@ -159,8 +207,8 @@ def export_front(
     columns = ["index", *shown, *[f"metric.{k}" for k in metrics], *[f"x{i + 1}" for i in range(n)],
                "baseline"]  # fmt: skip
     kind = _kind(job)
-    units: dict[str, tuple[str, str]] = {c: _unit(c, kind) for c in shown}
-    units.update({f"metric.{k}": _unit(k, kind) for k in metrics})
+    units: dict[str, tuple[str, str]] = {c: unit_of(c, kind) for c in shown}
+    units.update({f"metric.{k}": unit_of(k, kind) for k in metrics})
     rows = [
         (p.index, *_signed(_pad(p.objectives, m), flip),
          *[(per_point.get(p.index) or {}).get(k) for k in metrics], *_pad(p.x, n), None)
@@ -170,7 +218,7 @@ def export_front(
         mark = BaselineMark.from_record(b, names)
         rows.append((None, *_signed(_pad(mark.objectives, m), flip),
                      *[mark.metrics.get(k) for k in metrics], *[None] * n, b.name))  # fmt: skip
-    return _download(format, f"job-{job.id[:8]}-front", columns, rows, units)
+    return _download(format, "front", job.id, columns, rows, units)
 
 
 def _pad(values: Any, n: int) -> list[Any]:
@@ -208,7 +256,7 @@ def export_history(
             after = chunk[-1].generation
     m = max((len(g.best) if isinstance(g.best, list) else 1 for g in rows), default=len(names))
     names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
-    shown, flip = _shown(names)
+    shown, flip = shown_keys(names)
     several = m > 1
     columns = ["generation", "n_evals", *[f"best_{n}" for n in shown], "hypervolume",
                "wall_time_s"]  # fmt: skip
@@ -217,7 +265,7 @@ def export_history(
     kind = _kind(job)
     units: dict[str, tuple[str, str]] = {"wall_time_s": ("s", "wall time of the generation")}
     for n in shown:
-        unit, label = _unit(n, kind)
+        unit, label = unit_of(n, kind)
         units[f"best_{n}"] = (unit, f"best {label} so far")
         units[f"front_min_{n}"] = (unit, f"least {label} on the generation's front")
         units[f"compromise_{n}"] = (unit, f"{label} of the reported compromise point")
@@ -231,7 +279,7 @@ def export_history(
                 row = (*row, *_signed(_pad(c.front_min, m), flip), *_signed(reported, flip))
             yield row
 
-    return _download(format, f"job-{job.id[:8]}-history", columns, data(), units)
+    return _download(format, "history", job.id, columns, data(), units)
 
 
 @router.get(
@@ -246,26 +294,58 @@ def export_cells(
     """One row per cell: the swept values, job counts, then ``<column>_mean``, ``<column>_sd``
     and ``<column>_n`` of each objective, the hypervolume and each metric."""
     sweep, table = cell_table(ctx, key.id, sweep_id)
-    shown, flip = _shown(list(table.stat_columns))
-    stats = [f"{c}_{s}" for c in shown for s in ("mean", "sd", "n")]
+    shown = quantities(table.stat_columns, table.objective_names)
+    stats = [f"{q.name}_{s}" for q in shown for s in ("mean", "sd", "n")]
     columns = ["cell", *table.columns, "jobs", "succeeded", "seeds", *stats]
-    base = sweep.base_spec if isinstance(sweep.base_spec, dict) else {}
-    problem = base.get("problem")
-    kind = problem.get("kind") if isinstance(problem, dict) else None
-    kind = kind if isinstance(kind, str) else None
+    kind = study_kind(sweep)
     units: dict[str, tuple[str, str]] = {}
     for q in shown:
-        unit, label = _unit(q, kind)
-        units[f"{q}_mean"] = (unit, f"mean of {label} over the cell's seeds")
-        units[f"{q}_sd"] = (unit, f"standard deviation of {label} over the cell's seeds")
-        units[f"{q}_n"] = ("", f"succeeded seeds with {label}")
+        unit, label = unit_of(q.name, kind)
+        units[f"{q.name}_mean"] = (unit, f"mean of {label} over the cell's seeds")
+        units[f"{q.name}_sd"] = (unit, f"standard deviation of {label} over the cell's seeds")
+        units[f"{q.name}_n"] = ("", f"succeeded seeds with {label}")
     rows = []
     for c in table.cells:
         row: list[Any] = [c.index, *[c.values.get(p) for p in table.columns], len(c.job_ids),
                           c.counts.get("succeeded", 0), c.seeds]  # fmt: skip
-        for col, flipped in zip(table.stat_columns, flip, strict=True):
-            samples = c.samples.get(col, [])
-            mean, sd = mean_sd(samples)
-            row += [-mean if flipped and mean is not None else mean, sd, len(samples)]
+        for q in shown:
+            samples = q.samples(c.samples)
+            row += [*mean_sd(samples), len(samples)]
         rows.append(row)
-    return _download(format, f"sweep-{sweep.id[:8]}-cells", columns, rows, units)
+    return _download(format, "cells", sweep.id, columns, rows, units)
+
+
+@router.get(
+    "/sweeps/{sweep_id}/jobs/export",
+    summary="A sweep's jobs, one row each beside its cells, as CSV, JSON or Parquet",
+    responses=_FILE,
+    response_class=StreamingResponse,
+)
+def export_sweep_jobs(
+    sweep_id: str, key: CurrentKey, ctx: Context, format: FormatQuery = "csv"
+) -> StreamingResponse:
+    """One row per job of the sweep, in sweep order: its id, its ``cell`` (the index of the
+    cell export's rows), the cell's swept values, its seed, status and verdict (``feasible``,
+    ``violations``), then each objective (by name), the hypervolume and each metric
+    (``metric.<name>``) of its result in SI units — the quantities the cell export aggregates:
+    a cell's ``<name>_mean`` is the mean of its succeeded jobs' ``<name>`` (or
+    ``metric.<name>``); empty until the job has succeeded — then its progress, times and
+    error."""
+    table = sweep_job_table(ctx, key.id, sweep_id)
+    shown = quantities(table.stat_columns, table.objective_names)
+    names = [f"metric.{q.name}" if q.metric else q.name for q in shown]
+    units = {n: unit_of(q.name, table.kind) for n, q in zip(names, shown, strict=True)}
+    units["cell"] = ("", "index of the job's cell (the cell export's `cell`)")
+    columns = ["id", "cell", *table.columns, *SWEEP_JOB_STATE, *names, *SWEEP_JOB_TAIL]
+
+    def data() -> Iterator[tuple[Any, ...]]:
+        for row in table.jobs:
+            j, swept = row.job, table.cell_values.get(row.cell, {})
+            yield (
+                j.id, row.cell, *[swept.get(p) for p in table.columns], row.seed,
+                j.status.value, j.feasible, _verdict(j), *[q.value(row.values) for q in shown],
+                j.progress_generation, j.total_generations, j.created_at, j.started_at,
+                j.finished_at, j.error_message,
+            )  # fmt: skip
+
+    return _download(format, "sweep-jobs", table.sweep.id, columns, data(), units)

@@ -1,8 +1,9 @@
 """CSV injection (issue 22, item 2): every CSV download — the job list, a job's front and
-history, a sweep's cell table — writes the tenant's text (job names, tags, robot names, swept
-values, baseline and objective names) behind a ``'`` when it starts like a spreadsheet formula
-(``= + - @``, a tab, a carriage return), while numbers, negative ones included, stay numbers.
-The jobs are finished through the store as a worker finishes them (no optimisation)."""
+history, a sweep's cell table and its jobs — writes the tenant's text (job names, tags, robot
+names, swept values, baseline and objective names) behind a ``'`` when it starts like a
+spreadsheet formula (``= + - @``, a tab, a carriage return), while numbers, negative ones
+included, stay numbers. The jobs are finished through the store as a worker finishes them (no
+optimisation)."""
 
 from __future__ import annotations
 
@@ -73,6 +74,7 @@ EXPORTS = {
     f"{API}/jobs/{{job_id}}/front/export",
     f"{API}/jobs/{{job_id}}/history/export",
     f"{API}/sweeps/{{sweep_id}}/cells/export",
+    f"{API}/sweeps/{{sweep_id}}/jobs/export",
 }
 
 
@@ -161,6 +163,12 @@ def test_the_cell_table_export_neutralises_swept_text(
     assert rows[0][5:7] == ["'-gain_mean", "'-gain_sd"]  # header cells are text too
     assert {c["'-gain_mean"] for c in cells} == {"-2.5"}  # numbers stay numbers
     assert {c["time_mean [s]"] for c in cells} == {"-2.0"}
+    rows = _rows(client.get(f"{API}/sweeps/{sweep_id}/jobs/export?format=csv", headers=alice))
+    jobs = [dict(zip(rows[0], r, strict=True)) for r in rows[1:]]
+    assert [j["name"] for j in jobs] == ["'" + f for f in FORMULAS for _ in (1, 2)]
+    assert {j["'-gain"] for j in jobs} == {"-2.5"} and {j["time [s]"] for j in jobs} == {"-2.0"}
     # another key sees none of it
     bob = {"X-API-Key": new_key(ctx, "bob")[0]}
-    assert client.get(f"{API}/sweeps/{sweep_id}/cells/export", headers=bob).status_code == 404
+    for what in ("cells", "jobs"):
+        r = client.get(f"{API}/sweeps/{sweep_id}/{what}/export", headers=bob)
+        assert r.status_code == 404

@@ -1,0 +1,200 @@
+"""What the exports' tables are made of: each quantity once, in its own sign, with its unit
+and label; and a sweep's jobs one row each, beside its cells (``GET /sweeps/{id}/jobs/export``).
+
+A result stores its objectives as the optimiser minimises them (``neg_score``: a maximised
+quantity negated) while a study keys its reported objective values by the quantity's own name
+(``score``); an export shows the quantity once, under its own name and sign
+(:class:`Quantity`), whichever of the two keys holds it.
+
+Each job's row names its cell (the index of ``GET /sweeps/{id}/cells`` and of the cell export),
+the cell's swept values and the job's seed, and holds the job's own value of every column the
+cell table aggregates: each objective and metric of its result, and its final front's
+hypervolume against the same sweep-wide reference point the cells use (``nadir + 10 %`` of the
+union of the sweep's final fronts), so that the mean over a cell's succeeded jobs is the cell's
+``<column>_mean``. Values are in the result's SI units (the export labels them); a job without
+a result (queued, running, failed, cancelled) has none.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from services.api.deps import ApiContext
+from services.api.lookups import owned_sweep_jobs, study_kind
+from services.api.quantities import describe
+from services.api.sweep_cells import HYPERVOLUME, build_cells
+from services.api.sweeps import swept_paths
+from services.store import output_queries as oq
+from services.store import repository as repo
+from services.store.records import JobRecord, ParetoPointRecord, SweepRecord
+from services.store.specs import shown_value
+from services.store.tables import JobStatus
+
+__all__ = [
+    "Quantity",
+    "SweepJob",
+    "SweepJobTable",
+    "quantities",
+    "shown_keys",
+    "sweep_job_table",
+    "unit_of",
+]
+
+
+def unit_of(key: str, kind: str | None) -> tuple[str, str]:
+    """``(SI unit, label)`` of a result key of the study ``kind`` (unit "" when dimensionless;
+    a ``neg_`` objective: of the quantity it negates)."""
+    from legcore.studies.metric_names import display_objective
+
+    d = describe(display_objective(key, None)[0], kind)
+    return d["unit"], d["label"]
+
+
+def shown_keys(names: Sequence[str]) -> tuple[list[str], list[bool]]:
+    """The objectives' exported keys (``neg_<m>`` as ``<m>``: one sign per quantity, the
+    quantity's own) and which of them are flipped."""
+    from legcore.studies.metric_names import display_objective
+
+    shown = [display_objective(n, None)[0] for n in names]
+    return shown, [s != n for s, n in zip(shown, names, strict=True)]
+
+
+class Quantity(NamedTuple):
+    """A column of a sweep's stat table as exported: the result key it is stored under
+    (``key``), the quantity's own name (``name``), whether the stored values are negated
+    (``flipped``) and whether it is a metric (not an objective, not the hypervolume)."""
+
+    key: str
+    name: str
+    flipped: bool
+    metric: bool
+
+    def value(self, values: Mapping[str, Any]) -> Any:
+        """Its value in ``values`` (by result key), in its own sign (None when absent)."""
+        if self.key in values:
+            v = values[self.key]
+            return -v if self.flipped and isinstance(v, int | float) else v
+        return values.get(self.name)  # keyed by the quantity's own name: its own sign
+
+    def samples(self, samples: Mapping[str, Sequence[float]]) -> list[float]:
+        """Its samples (a cell's, by result key), in its own sign."""
+        if self.key in samples:
+            return [-v if self.flipped else v for v in samples[self.key]]
+        return list(samples.get(self.name, []))
+
+
+def quantities(stat_columns: Sequence[str], objective_names: Sequence[str]) -> list[Quantity]:
+    """A sweep's stat columns (``CellTable.stat_columns``) as exported, each quantity once: a
+    metric that is also a (negated) objective is the objective's column."""
+    shown, flip = shown_keys(stat_columns)
+    out: list[Quantity] = []
+    for col, name, flipped in zip(stat_columns, shown, flip, strict=True):
+        if all(name != q.name for q in out):
+            metric = col not in objective_names and col != HYPERVOLUME
+            out.append(Quantity(col, name, flipped, metric))
+    return out
+
+
+@dataclass
+class SweepJob:
+    """One job of a sweep: its record, its cell's index, its seed and its value of each stat
+    column (objectives and metrics in the result's units, the hypervolume; absent when the job
+    has none)."""
+
+    job: JobRecord
+    cell: int
+    seed: Any
+    values: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class SweepJobTable:
+    """A sweep's jobs in sweep order with what their rows share: the sweep, its study kind,
+    the cell columns (swept paths but the seed), each cell's swept values by cell index, the
+    stat columns (the cell table's: objectives, then hypervolume, then metrics) and the
+    objectives' names."""
+
+    sweep: SweepRecord
+    kind: str | None
+    columns: list[str]
+    cell_values: dict[int, dict[str, Any]]
+    stat_columns: list[str]
+    objective_names: list[str]
+    jobs: list[SweepJob]
+
+
+def _numeric(d: Any) -> dict[str, float]:
+    """The finite numbers of a mapping (what the cell table samples)."""
+    if not isinstance(d, Mapping):
+        return {}
+    return {
+        str(k): float(v)
+        for k, v in d.items()
+        if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+    }
+
+
+def _hypervolume(points: Sequence[ParetoPointRecord], ref: Sequence[float] | None) -> float | None:
+    """The hypervolume of a final front against the sweep-wide reference ``ref`` (None when
+    the front has no finite point of ``len(ref)`` objectives)."""
+    from legcore.metrics import hypervolume
+
+    if ref is None or not points:
+        return None
+    F = np.asarray([p.objectives for p in points if p.objectives], dtype=float)
+    if F.ndim != 2 or F.shape[0] == 0 or F.shape[1] != len(ref):
+        return None
+    F = F[np.all(np.isfinite(F), axis=1)]
+    return float(hypervolume(F, ref).value) if F.shape[0] else None
+
+
+def sweep_job_table(ctx: ApiContext, key_id: str, sweep_id: str) -> SweepJobTable:
+    """The caller's sweep ``sweep_id`` (404 when missing or another key's) as one row per job,
+    grouped into cells exactly as ``lookups.cell_table`` groups them."""
+    with ctx.read() as session:
+        sweep, jobs = owned_sweep_jobs(session, key_id, sweep_id)
+        done = [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
+        results = repo.result_briefs(session, done)
+        fronts = oq.fronts_of(session, done)
+    axes = sweep.axes if isinstance(sweep.axes, dict) else {}
+    swept = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
+
+    def value(job: JobRecord, path: str) -> Any:
+        return shown_value(job.spec or sweep.base_spec, job.overrides, path)
+
+    kind = study_kind(sweep)
+    table = build_cells(
+        jobs, value, swept, results, fronts, sense=lambda n: describe(n, kind)["sense"]
+    )
+    where: dict[str, tuple[int, Any]] = {}
+    for cell in table.cells:
+        for job_id, seed in zip(cell.job_ids, cell.seeds, strict=True):
+            where[job_id] = (cell.index, seed)
+    rows = []
+    for job in jobs:
+        index, seed = where[job.id]
+        values: dict[str, float] = {}
+        brief = results.get(job.id)
+        if brief is not None:
+            objectives, metrics = brief
+            if isinstance(objectives, Mapping):
+                values.update(_numeric(objectives.get("values")))
+            values.update(_numeric(metrics))
+            hv = _hypervolume(fronts.get(job.id, []), table.hypervolume_ref)
+            if hv is not None:
+                values[HYPERVOLUME] = hv
+        rows.append(SweepJob(job=job, cell=index, seed=seed, values=values))
+    return SweepJobTable(
+        sweep=sweep,
+        kind=kind,
+        columns=table.columns,
+        cell_values={c.index: c.values for c in table.cells},
+        stat_columns=table.stat_columns,
+        objective_names=table.objective_names,
+        jobs=rows,
+    )
