@@ -29,7 +29,6 @@ from services.api.routes import health, jobs, keys, robots, studies, sweep_cance
 from services.api.routes.dashboard_routers import DASHBOARD_ROUTERS
 from services.api.schemas import ErrorOut
 from services.api.security_headers import SecurityHeadersMiddleware
-from services.api.sweeps import MAX_SWEEP_JOBS
 from services.store.settings import Settings, get_settings
 from services.web import mount_dashboard
 
@@ -53,7 +52,7 @@ def create_app(
     enqueue: Enqueue | None = None,
     *,
     max_body_bytes: int = DEFAULT_MAX_BODY_BYTES,
-    max_sweep_jobs: int = MAX_SWEEP_JOBS,
+    max_sweep_jobs: int | None = None,
 ) -> FastAPI:
     """Build the API.
 
@@ -65,13 +64,14 @@ def create_app(
             database. If it raises, the job stays queued and due, and the dispatcher of the
             workers sends it once the broker answers.
         max_body_bytes: larger request bodies are refused with 413.
-        max_sweep_jobs: a sweep expanding to more jobs is refused with 422.
+        max_sweep_jobs: a sweep expanding to more jobs is refused with 422 (default
+            ``settings.max_sweep_jobs``, ``LEGOPT_MAX_SWEEP_JOBS``).
     """
     settings = settings if settings is not None else get_settings()
     ctx = ApiContext(
         settings=settings,
         enqueue=enqueue if enqueue is not None else default_enqueue,
-        max_sweep_jobs=max_sweep_jobs,
+        max_sweep_jobs=max_sweep_jobs if max_sweep_jobs is not None else settings.max_sweep_jobs,
         prefix=API_PREFIX,
         rate_limiter=RateLimiter(settings.rate_limit_per_s, settings.rate_limit_burst),
     )

@@ -28,6 +28,7 @@ from services.api.rate_limit import (
     retry_after_header,
 )
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT
+from services.api.sweeps import MAX_SWEEP_JOBS
 from services.store.artifacts import ArtifactStore
 from services.store.keys import hash_api_key
 from services.store.records import ApiKeyRecord
@@ -67,7 +68,7 @@ class ApiContext:
 
     settings: Settings
     enqueue: Enqueue = default_enqueue
-    max_sweep_jobs: int = 1000
+    max_sweep_jobs: int = MAX_SWEEP_JOBS
     prefix: str = "/api/v1"
     actor: str = field(default_factory=_api_actor)
     rate_limiter: RateLimiter | None = None

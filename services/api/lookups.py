@@ -24,9 +24,6 @@ from services.store.records import JobRecord, SweepRecord
 from services.store.specs import shown_value, spec_value
 from services.store.tables import JobStatus
 
-#: Jobs a sweep can have (``services.api.sweeps.MAX_SWEEP_JOBS``); read in one page.
-_ALL = 1000
-
 
 def owned_job(session: Session, job_id: str, owner_key_id: str) -> JobRecord:
     """The caller's job ``job_id``; 404 when missing or another key's."""
@@ -63,8 +60,7 @@ def owned_sweep_jobs(
     sweep = repo.get_sweep(session, sweep_id, owner_key_id=key_id)
     if sweep is None:
         raise not_found("sweep", sweep_id)
-    page = repo.list_jobs(session, owner_key_id=key_id, sweep_id=sweep.id, limit=_ALL, offset=0)
-    return sweep, list(reversed(page.items))  # sweep order
+    return sweep, list(repo.sweep_jobs(session, sweep.id, owner_key_id=key_id))
 
 
 def cell_table(ctx: ApiContext, key_id: str, sweep_id: str) -> tuple[SweepRecord, CellTable]:

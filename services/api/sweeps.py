@@ -26,12 +26,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from services.store.settings import Settings
 from services.store.spec_paths import OverrideError, split_path, with_overrides
 
 Loc = tuple[str | int, ...]
 
-#: Default limit on the number of jobs one sweep may create.
-MAX_SWEEP_JOBS = 1000
+#: Default limit on the number of jobs one sweep may create (``Settings.max_sweep_jobs``).
+MAX_SWEEP_JOBS: int = Settings.model_fields["max_sweep_jobs"].default
 
 class SweepError(ValueError):
     """A sweep request that cannot be expanded; ``loc`` is relative to the request body."""

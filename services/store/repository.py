@@ -462,6 +462,16 @@ def list_jobs(
     return fetch_page(session, JobRecord, stmt, order, limit, offset, count_cap=COUNT_CAP)
 
 
+def sweep_jobs(
+    session: Session, sweep_id: str, *, owner_key_id: str | None = None
+) -> tuple[JobRecord, ...]:
+    """Every job of sweep ``sweep_id`` in the sweep's order (the order they were created in);
+    a sweep has at most ``Settings.max_sweep_jobs`` jobs."""
+    conditions = [*_owned(JOBS, owner_key_id), JOBS.c.sweep_id == sweep_id]
+    stmt = select(JOBS).where(*conditions).order_by(JOBS.c.created_at, JOBS.c.id)
+    return fetch_all(session, JobRecord, stmt)
+
+
 def count_jobs_by_status(
     session: Session, *, owner_key_id: str | None = None, sweep_id: str | None = None
 ) -> dict[JobStatus, int]:

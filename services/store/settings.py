@@ -150,7 +150,18 @@ class Settings(BaseModel):
 
     # Per-API-key quotas (defaults; a key may carry its own, see ``api_keys``).
     quota_active_jobs: int = Field(
-        default=2_000, gt=0, description="Max queued + running jobs of one API key."
+        default=20_000,
+        gt=0,
+        description="Max queued + running jobs of one API key (room for two sweeps of "
+        "max_sweep_jobs).",
+    )
+    max_sweep_jobs: int = Field(
+        default=10_000,
+        ge=1,
+        le=1_000_000,
+        description="Most jobs one sweep may expand to; a larger sweep is refused with a 422 "
+        "naming its size. A 10^4-job sweep is one request answered in seconds "
+        "(benchmarks/bench_sweep_scale.py).",
     )
     quota_cpu_seconds_per_hour: float = Field(
         default=36_000.0,

@@ -75,9 +75,7 @@ def _relocate(errors: list[dict[str, Any]], point: SweepPoint) -> list[dict[str,
     status_code=status.HTTP_202_ACCEPTED,
     response_model=SweepCreated,
     summary="Create a sweep: one job per grid point × list entry × seed",
-    responses={
-        429: {"model": ErrorOut, "description": "Over a quota or the request rate limit."}
-    },
+    responses={429: {"model": ErrorOut, "description": "Over a quota or the request rate limit."}},
 )
 def create_sweep(
     body: SweepCreate,
@@ -287,11 +285,9 @@ def get_sweep_recording(
         sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
         if sweep is None:
             raise not_found("sweep", sweep_id)
-        members = repo.list_jobs(
-            session, owner_key_id=key.id, sweep_id=sweep.id, limit=1000, offset=0
-        ).items
+        members = repo.sweep_jobs(session, sweep.id, owner_key_id=key.id)
         by_id = {j.id: j for j in members}
-        chosen = list(jobs) if jobs else [j.id for j in reversed(members)]
+        chosen = list(jobs) if jobs else [j.id for j in members]
         unknown = [j for j in chosen if j not in by_id]
         if unknown:
             raise invalid(("query", "jobs"), f"not jobs of sweep {sweep.id}: {', '.join(unknown)}")

@@ -249,12 +249,12 @@ def test_bad_sweeps_store_nothing(
         ),
         ({"base": base, "grid": {"seed": []}}, ["body", "grid", "seed"]),
         ({"base": base, "grid": {"seed": [1]}, "seeds": [2]}, ["body", "seeds"]),
-        # too many jobs
+        # too many jobs (MAX_SWEEP_JOBS = 10 000: 101 × 100)
         (
             {
                 "base": base,
-                "grid": {"budget.generations": list(range(1, 41))},
-                "seeds": list(range(30)),
+                "grid": {"budget.generations": list(range(1, 102))},
+                "seeds": list(range(100)),
             },
             ["body"],
         ),
