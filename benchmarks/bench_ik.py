@@ -16,7 +16,7 @@ singularities), K samples; task ``"pose"`` (position and orientation), accuracy 
   (``framesForwardKinematics`` + ``computeFrameJacobian`` LOCAL_WORLD_ALIGNED, error
   ``[p* − p; log3(R* Rᵀ)]``, ``Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e`` with λ = 1e-9, full steps) until both
   errors are ≤ 1e-9 (no joint limits, no null-space term);
-- ``oracle numpy batch``: ``legcore.kinematics.ik_dls`` on all K samples at once (numpy, every
+- ``oracle numpy batch``: ``legcore.ik.dls.ik_dls`` on all K samples at once (numpy, every
   sample iterated together), each seeded with the *exact* solution of its previous sample — the
   best a parallel-in-samples scheme could start from;
 - ``legcore.ik.solve``: the compiled continuation (joint limits, rest-posture null space for the
@@ -42,8 +42,10 @@ import numpy as np
 import pinocchio as pin
 
 from legcore.ik import solve
-from legcore.kinematics import fk, ik_dls, log3
+from legcore.ik.dls import ik_dls
+from legcore.kinematics import fk
 from legcore.robots import Robot, build_robot
+from legcore.transforms import log3
 
 TOL = 1e-9
 HALF = math.pi / 2

@@ -11,7 +11,7 @@ of :mod:`legcore.kinematics` (joint ``i``'s world pose is ``pose_{i-1} · (R_i, 
 exp(axis_i q_i)``), where each revolute joint's rotation ``R_i exp([a_i]× q)`` is
 ``Q0_i + cos q · Qc_i + sin q · Qs_i`` with the three 3×3 matrices computed once per robot
 (Rodrigues; a quarter fewer flops than rotating by ``R_i`` and then by the exponential), and the
-joint sines/cosines computed block-wise by the vectorisable :func:`legcore.dynamics._sincos`
+joint sines/cosines computed block-wise by the vectorisable :func:`legcore.sincos._sincos`
 (agrees with libm to ~1e-16). The result equals ``frames(robot, q)[..., :3, 3]`` (and
 ``fk(robot, q)[..., :3, 3]`` for the tool) to ~1e-15 m; ``tests/legcore/test_fast_evaluation.py``
 checks it to 1e-12 on the catalog robots and a URDF arm with a prismatic joint.
@@ -25,9 +25,9 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from legcore.dynamics import _BLOCK, _sincos
 from legcore.kinematics import _as_q, _link_placements
 from legcore.robots.model import Robot
+from legcore.sincos import _BLOCK, _sincos
 
 __all__ = ["chain_points"]
 

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from legcore.joint_angles import wrap_branch_solutions
 from legcore.robots.spec import DHRobotSpec, RobotSpec
 
 __all__ = ["BRANCH_NAMES", "Arm5Geometry", "Arm5Solutions", "arm5_geometry", "arm5_ik_down"]
@@ -127,8 +128,6 @@ def arm5_ik_down(
     keeps joint 5 at q5 = 0. With ``q_min``/``q_max`` (5,) the angles are shifted by 2π into the
     limits where possible (nearest ``q_ref`` (…, 4, 5)-broadcastable, if given).
     """
-    from legcore.kinematics import wrap_branch_solutions
-
     p = np.asarray(p, dtype=float)
     if p.ndim < 1 or p.shape[-1] != 3:
         raise ValueError(f"p: expected positions (..., 3), got shape {p.shape}")

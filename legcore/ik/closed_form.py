@@ -7,7 +7,7 @@
 - ``"arm5_down"``: task ``"axis"`` with every target axis pointing straight down (4 branches,
   :mod:`legcore.ik.arm5`, joint 5 at 0: the spin about the axis is free);
 - ``"leg3"`` / ``"leg2"``: task ``"position"`` (2 knee branches each, preferring per branch the
-  yaw family inside the limits, as :func:`legcore.kinematics.ik`).
+  yaw family inside the limits, as :func:`legcore.ik.dispatch.ik`).
 
 :func:`track_branches` then picks one candidate per sample inside the joint limits — nearest
 ``q0`` for independent targets, nearest the previous sample's choice along a path (so a path
@@ -23,6 +23,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from legcore.ik.dispatch import ik
 from legcore.robots.model import Robot
 
 __all__ = ["closed_form_candidates", "track_branches"]
@@ -41,8 +42,6 @@ def closed_form_candidates(
     Returns ``(q (N, B, n), ok (N, B), branch names)`` with ``ok`` = reachable and inside the
     joint limits, or None when the robot's ``ik_family`` does not solve this task exactly.
     """
-    from legcore import kinematics as K
-
     family = robot.ik_family
     if family == "puma560" and task == "pose":
         from legcore.ik.puma560 import BRANCH_NAMES, puma560_geometry, puma560_ik
@@ -64,7 +63,7 @@ def closed_form_candidates(
         names = ("knee-up", "knee-down") if family == "leg3" else ("elbow-back", "knee-forward")
         qs, oks = [], []
         for b in range(len(names)):
-            res = K.ik(robot, p, branch=b)
+            res = ik(robot, p, branch=b)
             qs.append(res.q)
             oks.append(res.reachable & res.within_limits)
         return np.stack(qs, axis=1), np.stack(oks, axis=1), names

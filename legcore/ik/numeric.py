@@ -42,11 +42,11 @@ from legcore.ik.newton import (
     PRM_TOL_R,
     PRM_W,
     newton,
-    track,
     workspace,
 )
 from legcore.ik.sample_kinematics import interp_target, z_chain
 from legcore.ik.targets import TASK_ROWS, IKSolution, parse_targets
+from legcore.ik.track import track
 from legcore.robots.model import Chain, Robot
 
 __all__ = ["halton_seeds", "solve_numeric", "solve_parsed"]

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from legcore.joint_angles import wrap_branch_solutions
 from legcore.robots.spec import DHRobotSpec, RobotSpec
 
 __all__ = [
@@ -149,8 +150,6 @@ def puma560_ik(
     (6,) they are shifted by 2π into the limits where possible (nearest ``q_ref``, broadcastable
     to (..., 8, 6), if given) and ``within_limits`` says which branches are inside.
     """
-    from legcore.kinematics import wrap_branch_solutions
-
     T = np.asarray(T, dtype=float)
     if T.ndim < 2 or T.shape[-2:] != (4, 4):
         raise ValueError(f"T: expected poses (..., 4, 4), got shape {T.shape}")

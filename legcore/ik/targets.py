@@ -24,7 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from legcore.ik.newton import TASK_AXIS, TASK_POSE, TASK_POSITION
-from legcore.kinematics import IKResult, log3
+from legcore.ik.result import IKResult
+from legcore.transforms import log3
 
 __all__ = ["TASK_ROWS", "IKSolution", "Task", "parse_targets", "task_errors"]
 
@@ -37,7 +38,7 @@ TASK_ROWS: dict[str, int] = {"position": TASK_POSITION, "axis": TASK_AXIS, "pose
 
 @dataclass(frozen=True, eq=False)
 class IKSolution(IKResult):
-    """:class:`~legcore.kinematics.IKResult` of :func:`legcore.ik.solve`, plus path information.
+    """:class:`~legcore.ik.result.IKResult` of :func:`legcore.ik.solve`, plus path information.
 
     Here ``reachable`` means *solved inside the joint limits* to the tolerance (so
     ``within_limits`` equals it): a target that is only reachable outside the limits is

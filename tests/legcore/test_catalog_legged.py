@@ -8,10 +8,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from legcore.gaits import TRIPOD, UNBOUNDED_SPANS, tripod_feet, tripod_stability
+from legcore.gaits import TRIPOD
 from legcore.ik import ELBOW_BACK, KNEE_FORWARD, leg2_fk, leg2_ik, leg3_fk, leg3_ik
 from legcore.robots import LeggedRobot, Robot, build_robot
 from legcore.robots.catalog import animatronic_quadruped, citedi_hexapod
+from legcore.tripod_stability import UNBOUNDED_SPANS, tripod_feet, tripod_stability
 
 
 @pytest.fixture(scope="module")

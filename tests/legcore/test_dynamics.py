@@ -241,7 +241,7 @@ def test_bad_input_names_argument():
 
 
 def test_block_sincos_matches_libm():
-    from legcore.dynamics import _sincos
+    from legcore.sincos import _sincos
 
     rng = np.random.default_rng(5)
     x = np.concatenate(

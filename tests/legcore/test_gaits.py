@@ -15,9 +15,10 @@ from legcore.gaits import (
     Gait,
     gait_phase,
     leg_phase,
-    stability_margin,
     support_flags,
-    support_polygon,
+)
+from legcore.support_polygon import stability_margin, support_polygon
+from legcore.tripod_stability import (
     support_triangle,
     tripod_feet,
     tripod_stability,

@@ -9,6 +9,7 @@ import pytest
 
 from legcore import kinematics as K
 from legcore.ik.arm5 import BRANCH_NAMES, arm5_geometry, arm5_ik_down
+from legcore.ik.dispatch import ik
 from legcore.robots import build_robot, catalog
 
 
@@ -51,7 +52,7 @@ def test_home_pose_of_the_paper_points_the_tool_horizontally(robot):
 
 def test_capsule_from_the_paper_equations_is_tracked_pointing_down(robot):
     p = capsule_points_from_paper()
-    res = K.ik(robot, p)
+    res = ik(robot, p)
     assert res.method == "arm5_down"
     assert res.reachable.all() and res.within_limits.all()
     check_down_and_on_target(robot, res.q, p)
@@ -79,7 +80,7 @@ def test_capsule_from_legcore_trajectories_is_tracked_pointing_down(robot):
     )
     assert np.all(on_arc | on_line)
     yaw = np.full(len(p), 0.3)  # a fixed tool heading
-    res = K.ik(robot, p, yaw=yaw)
+    res = ik(robot, p, yaw=yaw)
     assert res.reachable.all() and res.within_limits.all()
     check_down_and_on_target(robot, res.q, p)
     T = K.fk(robot, res.q)
@@ -122,7 +123,7 @@ def test_all_four_branches_round_trip(robot):
 
 def test_unreachable_and_tilted_targets_are_reported(robot):
     p = np.array([[1.2, 0.0, 0.5], [0.4, 0.1, 0.5], [0.0, 0.0, -0.6]])
-    res = K.ik(robot, p)
+    res = ik(robot, p)
     assert res.reachable.tolist() == [False, True, False]
     assert np.isnan(res.q[[0, 2]]).all() and res.branch[[0, 2]].tolist() == [-1, -1]
     # pose targets: pointing down (with a yaw) is solved, any other orientation is reported
@@ -131,7 +132,7 @@ def test_unreachable_and_tilted_targets_are_reported(robot):
     T[0, :3, :3] = np.array([[c, s, 0], [s, -c, 0], [0, 0, -1.0]])  # x at 0.7 rad, z down
     T[1, :3, :3] = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # tool horizontal
     T[:, :3, 3] = (0.3, 0.3, 0.5)
-    res_T = K.ik(robot, T)
+    res_T = ik(robot, T)
     assert res_T.reachable.tolist() == [True, False]
     np.testing.assert_allclose(K.fk(robot, res_T.q[0]), T[0], atol=1e-9)
     assert res_T.error[0] < 1e-9
@@ -155,7 +156,7 @@ def test_tool_roll_base_and_offsets_are_honoured():
     rng = np.random.default_rng(201)
     p = np.c_[rng.uniform(-0.3, 0.5, (100, 2)), rng.uniform(0.2, 0.8, 100)]
     yaw = rng.uniform(-3, 3, 100)
-    res = K.ik(robot, p, yaw=yaw)
+    res = ik(robot, p, yaw=yaw)
     assert res.reachable.all()
     T = K.fk(robot, res.q)
     np.testing.assert_allclose(T[:, :3, 3], p, atol=1e-9)

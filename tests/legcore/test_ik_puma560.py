@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from legcore import kinematics as K
+from legcore.ik.dispatch import ik
 from legcore.ik.puma560 import BRANCH_NAMES, puma560_geometry, puma560_ik
+from legcore.manipulability import manipulability_split
 from legcore.robots import build_robot, catalog
 from legcore.robots.catalog import puma560 as puma_module
 
@@ -47,7 +49,7 @@ def random_case(robot):
     rng = np.random.default_rng(100)
     q = rng.uniform(robot.q_min, robot.q_max, (300, 6))
     # keep away from the exact singularities so that all 8 branches are distinct
-    w, w_A, w_W = K.manipulability_split(robot, q)
+    w, w_A, w_W = manipulability_split(robot, q)
     q = q[(w_W > 0.05) & (w_A > 1e-3)]
     return q, K.fk(robot, q)
 
@@ -98,22 +100,22 @@ def test_branch_names_match_the_geometry(robot, random_case):
 
 def test_ik_dispatch_picks_branch_and_reports(robot, random_case):
     q, T = random_case
-    res = K.ik(robot, T)
+    res = ik(robot, T)
     assert res.method == "puma560" and res.branch_names == BRANCH_NAMES
     assert res.reachable.all() and res.within_limits.all()
     assert np.all(res.error < 1e-9)
     np.testing.assert_allclose(K.fk(robot, res.q), T, atol=1e-9)
     # nearest to the configuration itself → recovers it
-    res_ref = K.ik(robot, T, q_ref=q)
+    res_ref = ik(robot, T, q_ref=q)
     np.testing.assert_allclose(res_ref.q, q, atol=1e-9)
     # an explicit branch, by name or index
-    res_b = K.ik(robot, T, branch="right-down-flip")
+    res_b = ik(robot, T, branch="right-down-flip")
     assert np.all(res_b.branch == BRANCH_NAMES.index("right-down-flip"))
     np.testing.assert_allclose(K.fk(robot, res_b.q), T, atol=1e-9)
     with pytest.raises(ValueError, match="branch"):
-        K.ik(robot, T, branch="sideways")
+        ik(robot, T, branch="sideways")
     with pytest.raises(ValueError, match="branch"):
-        K.ik(robot, T, branch=8)
+        ik(robot, T, branch=8)
 
 
 def test_unreachable_poses_are_reported_not_clipped(robot):
@@ -127,7 +129,7 @@ def test_unreachable_poses_are_reported_not_clipped(robot):
     assert not sol.reachable[0].any() and not sol.reachable[1].any()
     assert sol.reachable[2].all()
     assert np.isnan(sol.q[:2]).all()
-    res = K.ik(robot, T)
+    res = ik(robot, T)
     assert res.reachable.tolist() == [False, False, True]
     assert np.isnan(res.q[:2]).all() and res.branch[:2].tolist() == [-1, -1]
     assert np.isnan(res.error[:2]).all()
@@ -159,7 +161,7 @@ def test_bare_arm_batch_shapes_and_limits():
     inside = np.all((sol.q >= bare.q_min - 1e-12) & (sol.q <= bare.q_max + 1e-12), axis=-1)
     np.testing.assert_array_equal(sol.within_limits, inside & sol.reachable)
     assert sol.within_limits.any(axis=-1).all()  # the source configuration is inside
-    res = K.ik(bare, T)
+    res = ik(bare, T)
     assert res.q.shape == (4, 5, 6) and res.within_limits.all()
 
 

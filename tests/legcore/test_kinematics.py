@@ -13,7 +13,13 @@ import numpy as np
 import pytest
 
 from legcore import kinematics as K
+from legcore.ik.dispatch import ik
+from legcore.ik.dls import ik_dls
+from legcore.joint_angles import wrap_to_limits
+from legcore.kinematics_reference import fk_reference, frames_reference, jacobian_reference
+from legcore.manipulability import manipulability, manipulability_split
 from legcore.robots import LeggedRobot, Robot, build_robot, catalog
+from legcore.transforms import log3
 
 URDF = """<?xml version="1.0"?>
 <robot name="test6">
@@ -160,11 +166,11 @@ def test_jacobian_matches_dh_cross_products_and_finite_differences(name):
 def test_numba_path_equals_pinocchio_per_sample(label, robot):
     rng = np.random.default_rng(12)
     q = rng.uniform(robot.q_min, robot.q_max, (40, robot.nq))
-    np.testing.assert_allclose(K.fk(robot, q), K.fk_reference(robot, q), atol=1e-12, rtol=0)
+    np.testing.assert_allclose(K.fk(robot, q), fk_reference(robot, q), atol=1e-12, rtol=0)
     np.testing.assert_allclose(
-        K.jacobian(robot, q), K.jacobian_reference(robot, q), atol=1e-12, rtol=0
+        K.jacobian(robot, q), jacobian_reference(robot, q), atol=1e-12, rtol=0
     )
-    np.testing.assert_allclose(K.frames(robot, q), K.frames_reference(robot, q), atol=1e-12, rtol=0)
+    np.testing.assert_allclose(K.frames(robot, q), frames_reference(robot, q), atol=1e-12, rtol=0)
     T, J = K.fk_jacobian(robot, q)
     np.testing.assert_array_equal(T, K.fk(robot, q))
     np.testing.assert_array_equal(J, K.jacobian(robot, q))
@@ -211,13 +217,13 @@ def test_manipulability_split_seed001_matches_yoshikawa():
     robot = catalog.get("puma560")
     rng = np.random.default_rng(20)
     q = rng.uniform(robot.q_min, robot.q_max, (30, 6))
-    w, w_A, w_W = K.manipulability_split(robot, q)
+    w, w_A, w_W = manipulability_split(robot, q)
     np.testing.assert_allclose(w_W, np.abs(np.sin(q[:, 4])), rtol=0, atol=1e-15)
     np.testing.assert_allclose(w, w_A * np.abs(np.sin(q[:, 4])), rtol=1e-15, atol=0)
     J = K.jacobian(robot, q)
     yoshikawa = np.sqrt(np.linalg.det(J @ np.swapaxes(J, -1, -2)))
     np.testing.assert_allclose(w, yoshikawa, rtol=1e-10)
-    np.testing.assert_allclose(K.manipulability(robot, q), yoshikawa, rtol=1e-12)
+    np.testing.assert_allclose(manipulability(robot, q), yoshikawa, rtol=1e-12)
     h = 1e-6
     for s in range(5):
         cols = []
@@ -231,8 +237,8 @@ def test_manipulability_split_seed001_matches_yoshikawa():
     # the PUMA's seed-001 arm term vanishes at the elbow singularity d4 cos θ3 + a3 sin θ3 = 0
     a3, d4 = robot.spec.joints[2].a, robot.spec.joints[3].d
     q_sing = np.array([0.3, 0.4, math.atan2(-d4, a3), 0.2, 0.7, 0.1])
-    assert K.manipulability_split(robot, q_sing)[0] < 1e-15
-    assert K.manipulability(robot, q_sing) < 1e-12
+    assert manipulability_split(robot, q_sing)[0] < 1e-15
+    assert manipulability(robot, q_sing) < 1e-12
 
 
 def test_manipulability_of_robots_with_fewer_than_six_joints():
@@ -240,22 +246,22 @@ def test_manipulability_of_robots_with_fewer_than_six_joints():
     q = np.random.default_rng(21).uniform(arm.q_min, arm.q_max, (8, 5))
     Jv = K.jacobian(arm, q)[:, :3, :]
     np.testing.assert_allclose(
-        K.manipulability(arm, q), np.sqrt(np.linalg.det(Jv @ np.swapaxes(Jv, -1, -2))), rtol=1e-12
+        manipulability(arm, q), np.sqrt(np.linalg.det(Jv @ np.swapaxes(Jv, -1, -2))), rtol=1e-12
     )
     # all six rows, n = 5 < 6: the product of the 5 singular values (det(J Jᵀ) itself is 0)
     sv6 = np.linalg.svd(K.jacobian(arm, q), compute_uv=False)
-    np.testing.assert_allclose(K.manipulability(arm, q, rows="all"), sv6.prod(-1), rtol=1e-10)
+    np.testing.assert_allclose(manipulability(arm, q, rows="all"), sv6.prod(-1), rtol=1e-10)
     leg = catalog.get("animatronic_quadruped").legs[0].robot  # planar 2-DOF: 3 rows × 2 joints
     ql = np.random.default_rng(22).uniform(leg.q_min, leg.q_max, (8, 2))
     sv = np.linalg.svd(K.jacobian(leg, ql)[:, :3, :], compute_uv=False)
-    np.testing.assert_allclose(K.manipulability(leg, ql), sv.prod(axis=-1), rtol=1e-12)
+    np.testing.assert_allclose(manipulability(leg, ql), sv.prod(axis=-1), rtol=1e-12)
     # the 2R leg: |det| = l1 l2 |sin q4|
     l1, l2 = (j.a for j in leg.spec.joints)
-    np.testing.assert_allclose(K.manipulability(leg, ql), l1 * l2 * np.abs(np.sin(ql[:, 1])))
+    np.testing.assert_allclose(manipulability(leg, ql), l1 * l2 * np.abs(np.sin(ql[:, 1])))
     with pytest.raises(ValueError, match="rows"):
-        K.manipulability(leg, ql, rows="linear")  # type: ignore[arg-type]
+        manipulability(leg, ql, rows="linear")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="6R"):
-        K.manipulability_split(arm, q)
+        manipulability_split(arm, q)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -281,7 +287,7 @@ def test_log3_round_trips_including_near_pi():
     )
     w = axes * angles[:, None]
     R = np.array([_exp3(x) for x in w])
-    w_back = K.log3(R)
+    w_back = log3(R)
     R_back = np.array([_exp3(x) for x in w_back])
     np.testing.assert_allclose(R_back, R, atol=1e-9)
     np.testing.assert_allclose(w_back[5:], w[5:], atol=1e-9)
@@ -291,12 +297,12 @@ def test_wrap_to_limits_prefers_angles_inside_limits():
     lo = np.array([-0.5, -math.pi, -4.0, 0.0])
     hi = np.array([4.0, math.pi, 4.0, 1.0])
     q = np.array([-3.0, 3.5, 3.0, 0.5])
-    out = K.wrap_to_limits(q, lo, hi, revolute=[True, True, True, False])
+    out = wrap_to_limits(q, lo, hi, revolute=[True, True, True, False])
     np.testing.assert_allclose(out, [-3.0 + 2 * math.pi, 3.5 - 2 * math.pi, 3.0, 0.5])
-    out_ref = K.wrap_to_limits(q, lo, hi, q_ref=[0, 0, -3.0, 0], revolute=[True] * 3 + [False])
+    out_ref = wrap_to_limits(q, lo, hi, q_ref=[0, 0, -3.0, 0], revolute=[True] * 3 + [False])
     assert out_ref[2] == pytest.approx(3.0 - 2 * math.pi)
     # no equivalent inside → principal value, left outside (never clipped)
-    assert K.wrap_to_limits(np.array([2.0]), [-1.0], [1.0])[0] == 2.0
+    assert wrap_to_limits(np.array([2.0]), [-1.0], [1.0])[0] == 2.0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -312,7 +318,7 @@ def test_dls_converges_on_urdf_robot_and_flags_unreachable():
     q_true[:, 6] = 0.05  # the slider mid-travel
     T = K.fk(robot, q_true)
     T[:5, 0, 3] += 5.0  # 5 m away: out of reach
-    res = K.ik(robot, T, q_ref=q_true + rng.normal(0.0, 0.2, q_true.shape), tol=1e-12)
+    res = ik(robot, T, q_ref=q_true + rng.normal(0.0, 0.2, q_true.shape), tol=1e-12)
     assert res.method == "dls"
     assert not res.reachable[:5].any()
     assert np.isnan(res.q[:5]).all() and np.isnan(res.error[:5]).all()
@@ -332,17 +338,17 @@ def test_dls_on_modified_puma_reports_limits_instead_of_clipping():
     rng = np.random.default_rng(41)
     q_true = rng.uniform(robot.q_min + 0.3, robot.q_max - 0.3, (40, 6))
     T = K.fk(robot, q_true)
-    res = K.ik(robot, T, q_ref=q_true + rng.normal(0.0, 0.1, q_true.shape), tol=1e-12)
+    res = ik(robot, T, q_ref=q_true + rng.normal(0.0, 0.1, q_true.shape), tol=1e-12)
     assert res.reachable.all() and res.within_limits.all()
     np.testing.assert_allclose(K.fk(robot, res.q), T, atol=1e-9)
     q_out = robot.home.copy()
     q_out[1] = robot.q_min[1] - 0.2  # shoulder 0.2 rad below its limit
-    res_out = K.ik_dls(robot, K.fk(robot, q_out), q_out + 0.01, tol=1e-12)
+    res_out = ik_dls(robot, K.fk(robot, q_out), q_out + 0.01, tol=1e-12)
     assert res_out.reachable[()] and not res_out.within_limits[()]
     assert res_out.q[1] == pytest.approx(q_out[1], abs=1e-8)
     # position-only targets (…, 3)
     p = T[:, :3, 3]
-    res_p = K.ik_dls(robot, p, robot.home)
+    res_p = ik_dls(robot, p, robot.home)
     assert res_p.reachable.all()
     np.testing.assert_allclose(K.fk(robot, res_p.q)[:, :3, 3], p, atol=1e-9)
 
@@ -350,15 +356,15 @@ def test_dls_on_modified_puma_reports_limits_instead_of_clipping():
 def test_ik_argument_errors():
     robot = catalog.get("puma560")
     with pytest.raises(ValueError, match="target"):
-        K.ik(robot, np.zeros((2, 5)))
+        ik(robot, np.zeros((2, 5)))
     with pytest.raises(ValueError, match="positions"):
-        K.ik(robot, np.zeros((2, 3)))
+        ik(robot, np.zeros((2, 3)))
     with pytest.raises(ValueError, match="ik_dls"):
-        K.ik(robot, np.eye(4), tol=1e-3)
+        ik(robot, np.eye(4), tol=1e-3)
     with pytest.raises(ValueError, match="damping"):
-        K.ik_dls(robot, np.eye(4), robot.home, damping=-1.0)
+        ik_dls(robot, np.eye(4), robot.home, damping=-1.0)
     with pytest.raises(ValueError, match="q0"):
-        K.ik_dls(robot, np.eye(4), np.zeros(5))
+        ik_dls(robot, np.eye(4), np.zeros(5))
 
 
 @pytest.mark.parametrize(
@@ -378,9 +384,9 @@ def test_ik_dispatches_leg_families_to_their_closed_forms(name, leg):
     rng = np.random.default_rng(50)
     q = rng.uniform(robot.q_min, robot.q_max, (100, robot.nq))
     p = K.fk(robot, q)[:, :3, 3]
-    res = K.ik(robot, p)
+    res = ik(robot, p)
     assert res.method == robot.ik_family and len(res.branch_names) == 2
     assert res.reachable.all() and res.within_limits.all()
     np.testing.assert_allclose(K.fk(robot, res.q)[:, :3, 3], p, atol=1e-12)
-    far = K.ik(robot, p[:3] * 100.0)
+    far = ik(robot, p[:3] * 100.0)
     assert not far.reachable.any() and np.isnan(far.q).all()

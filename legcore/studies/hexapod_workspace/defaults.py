@@ -56,7 +56,6 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import ValidationError
 
-from legcore.gaits import support_triangle, tripod_stability
 from legcore.robots import catalog
 from legcore.robots.legged import LeggedRobot
 from legcore.studies.hexapod_workspace.legs import Tripod, tripod_from_robot
@@ -66,6 +65,7 @@ from legcore.studies.hexapod_workspace.reach import pose_box, stance_posture, th
 from legcore.studies.hexapod_workspace.robot import HexapodGeometry, parametric_hexapod
 from legcore.studies.study import Study
 from legcore.studies.task import Task, fill, validation_message
+from legcore.tripod_stability import support_triangle, tripod_stability
 
 __all__ = ["HexapodStudy", "derive", "study_robot"]
 

@@ -23,9 +23,9 @@ the perimeter to be equal and minimises the three errors::
     f1 = |β1ᵗ − β1ᵗ⁺¹|  (rad),   f2 = |β5ᵗ − β5ᵗ⁺¹|  (rad),   f3 = |pᵗ − pᵗ⁺¹|  (m)
 
 with β1, β5 the triangle's angles at feet 1 and 5 and p its perimeter (eqs 12–14, through
-:func:`legcore.gaits.support_triangle`; ``triangle_formula="interior"`` = the exact interior
-angles, ``"paper"`` = eqs 12–13 as printed — see docs/legged.md for their typos). F is computed
-for the whole population in one vectorised call.
+:func:`legcore.tripod_stability.support_triangle`; ``triangle_formula="interior"`` = the exact
+interior angles, ``"paper"`` = eqs 12–13 as printed — see docs/legged.md for their typos). F is
+computed for the whole population in one vectorised call.
 
 Stability (Fig. 6): the body centre must stay inside the support triangle, i.e. the distances
 S_f, S_b along x to the front and back diagonals must be positive. The paper applies it *after*
@@ -62,7 +62,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from legcore.gaits import stability_margin, support_triangle, tripod_feet, tripod_stability
 from legcore.metrics import hypervolume
 from legcore.studies.hexapod_workspace.defaults import study_robot
 from legcore.studies.hexapod_workspace.geometry import (
@@ -80,7 +79,9 @@ from legcore.studies.hexapod_workspace.legs import STANCE_ROLES, leg_roles
 from legcore.studies.hexapod_workspace.params import HV_REF, Params
 from legcore.studies.study import Motion, Solution, StudyProblem
 from legcore.studies.task import Violation
+from legcore.support_polygon import stability_margin
 from legcore.trajectories.profiles import QuinticProfile
+from legcore.tripod_stability import support_triangle, tripod_feet, tripod_stability
 
 __all__ = ["HV_REF", "PAPER_TABLE2", "HexapodWorkspaceProblem", "Params"]
 

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from scipy.optimize import minimize as scipy_minimize
 
 from legcore.ik.numeric import halton_seeds
-from legcore.kinematics import manipulability, manipulability_split
+from legcore.manipulability import manipulability, manipulability_split
 from legcore.robots.model import Robot
 from legcore.studies.path_placement.region import is_puma_type
 

@@ -61,7 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import electrical_energy, integrate
 from legcore.ik.puma560 import BRANCH_NAMES
-from legcore.kinematics import manipulability, manipulability_split
+from legcore.manipulability import manipulability, manipulability_split
 from legcore.robots.capabilities import Needs
 from legcore.robots.model import Robot
 from legcore.studies.path_placement import report

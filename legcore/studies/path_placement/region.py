@@ -30,7 +30,8 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from legcore.ik.numeric import halton_seeds
 from legcore.ik.puma560 import puma560_geometry
-from legcore.kinematics import fk, frames, manipulability_split
+from legcore.kinematics import fk, frames
+from legcore.manipulability import manipulability_split
 from legcore.robots.model import Robot
 
 __all__ = [

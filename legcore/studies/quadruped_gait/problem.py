@@ -39,8 +39,8 @@ Model (SI units; body frame x forward, y left, z up; leg frame x down, y forward
 * **Objective**: mechanical energy of all joints over one cycle, ``E = Σ ∫ |τ q̇| dt``
   (``energy_model``), per metre walked (``E / D``, J/m; default) or per cycle (J).
 * **Constraints** ``G ≤ 0`` (columns): (0) stability margin: ``margin_min − min_t margin`` in
-  mm, the margin being :func:`legcore.gaits.stability_margin` of the whole robot's COM (body
-  plus leg links) in the support polygon of the stance feet, over the cycle grid and just
+  mm, the margin being :func:`legcore.support_polygon.stability_margin` of the whole robot's COM
+  (body plus leg links) in the support polygon of the stance feet, over the cycle grid and just
   before/after every lift-off and touch-down; (1) reach: fraction of samples whose foot target
   is out of reach, outside the joint limits or singular (straight leg); (2) joint speed:
   ``max |q̇| / q̇_max − 1``; (3) torque: ``max |τ| / τ_max − 1`` (servo stall torque); (4) no
@@ -74,7 +74,7 @@ from numpy.typing import NDArray
 from legcore.chain_points import chain_points
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import integrate
-from legcore.gaits import QUADRUPED_WALK, Gait, leg_phase, stability_margin, support_polygon
+from legcore.gaits import QUADRUPED_WALK, Gait, leg_phase
 from legcore.joint_metrics import joint_metrics
 from legcore.robots.catalog.animatronic_quadruped import TABLE2
 from legcore.robots.legged import LeggedRobot
@@ -94,6 +94,7 @@ from legcore.studies.quadruped_gait.tables import (
     table2_comparison,
 )
 from legcore.studies.study import Motion, Solution, StudyProblem, Violation
+from legcore.support_polygon import stability_margin, support_polygon
 
 __all__ = ["Params", "QuadrupedGaitProblem", "TABLE2_PAPER", "UNREACHABLE_F"]
 
