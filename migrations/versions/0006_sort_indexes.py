@@ -49,7 +49,7 @@ def _name(table: str, columns: Sequence[str]) -> str:
 
 def first_objective(best: Any) -> float | None:
     """The number the jobs page sorts by: ``best`` itself or its first element, if finite
-    (a copy of ``services.store.lifecycle.first_objective``: a migration does not import the
+    (a copy of ``services.store.progress.first_objective``: a migration does not import the
     application)."""
     if isinstance(best, list | tuple):
         best = best[0] if best else None

@@ -56,13 +56,9 @@ from fastapi.exceptions import RequestValidationError
 
 from services.api.errors import MAX_ERRORS, Loc, invalid, public_errors, validation_error
 from services.api.rate_limit import retry_after_header
+from services.api.robot_validation import RobotInfo, check_robot_doc
 from services.api.sweeps import SweepPoint
-from services.api.validation import (
-    CheckedJob,
-    RobotInfo,
-    check_job_spec,
-    check_robot_doc,
-)
+from services.api.validation import CheckedJob, check_job_spec
 from services.store.settings import Settings
 
 log = logging.getLogger("legopt.api")
@@ -389,7 +385,7 @@ def check_robot(
     catalog_name: str | None, spec: Any, *, settings: Settings, key_id: str
 ) -> RobotInfo:
     """``POST /robots`` and ``/robots/validate``: the model built and described in a
-    validation process (``validation.check_robot_doc``)."""
+    validation process (``robot_validation.check_robot_doc``)."""
     loc: Loc = ("body", "catalog") if catalog_name is not None else ("body", "spec")
     return pool(settings).run(key_id, settings, loc, _check_robot, catalog_name, spec)
 

@@ -10,9 +10,9 @@ Typical use::
 
 Modules: ``settings`` (``Settings``, ``get_settings``), ``tables`` (the schema), ``session``
 (engines, ``session_scope``), ``records`` (frozen records handed out), ``repository``
-(create/get/list), ``lifecycle`` (claims, leases, progress, outcome, reaper), ``artifacts``
-(the artifact store: a local directory or S3), ``keys`` (API key hashing), ``migrate``
-(Alembic from Python).
+(create/get/list), ``lifecycle`` (claims, leases, cancellation, outcome, reaper), ``progress``
+(generations and checkpoints), ``artifacts`` (the artifact store: a local directory or S3),
+``keys`` (API key hashing), ``migrate`` (Alembic from Python).
 """
 
 from services.store.artifacts import ArtifactStore, StoredFile
@@ -35,14 +35,12 @@ from services.store.lifecycle import (
     finish_job,
     heartbeat,
     is_cancel_requested,
-    latest_checkpoint,
     mark_cancelled,
-    record_generation,
     request_cancel,
     request_cancels,
     requeue_expired,
-    save_checkpoint,
 )
+from services.store.progress import latest_checkpoint, record_generation, save_checkpoint
 from services.store.records import (
     ApiKeyRecord,
     ArtifactIn,

@@ -1,8 +1,9 @@
-"""Job lifecycle for workers and the reaper: claims, leases, progress, checkpoints, outcome.
+"""Job lifecycle for workers and the reaper: claims, leases, cancellation, outcome, reaper.
 
 A worker owns a running job through its *lease*: ``lease_owner`` (the worker id) and
-``lease_expires_at``. Every transition is ONE conditional UPDATE whose WHERE clause states the
-expected state, so two workers (or a re-delivered Celery message) can never both win:
+``lease_expires_at`` (the conditions are in ``leases``). Every transition is ONE conditional
+UPDATE whose WHERE clause states the expected state, so two workers (or a re-delivered Celery
+message) can never both win:
 
 - ``claim_job``: queued -> running, or running with an expired lease -> running (attempt + 1);
 - ``heartbeat`` / ``renew_lease``: extends the lease, only for the lease owner (``renew_lease``
@@ -10,48 +11,40 @@ expected state, so two workers (or a re-delivered Celery message) can never both
 - ``finish_job`` / ``fail_job`` / ``mark_cancelled``: running -> terminal, only for the owner;
 - ``requeue_expired``: running with an expired lease -> queued (or failed / cancelled).
 
-Worker writes (``record_generation(s)``, ``save_checkpoint``, ``finish_job``, ``fail_job``,
-``mark_cancelled``) raise ``LeaseLostError`` when the caller no longer owns the lease, and then
+Worker writes (``finish_job``, ``fail_job``, ``mark_cancelled``; the progress writes are in
+``progress``) raise ``LeaseLostError`` when the caller no longer owns the lease, and then
 write nothing; ``heartbeat`` returns False and ``claim_job`` returns None instead.
 Each function starts with its write statement, so on SQLite it takes the write lock first.
 
 Like the repository, functions take the ``Session`` first and never commit. ``finish_job``
 runs inside a SAVEPOINT, so it is all-or-nothing even within a larger transaction.
-Generation numbers: 0 is the initial population, 1..total_generations the following ones;
-``progress_generation`` is the highest generation recorded.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Sequence
-from datetime import datetime, timedelta
+from datetime import datetime
 from typing import Any
 
 from sqlalchemy import ColumnElement, and_, case, func, insert, literal, select, update
-from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
 from services.store.errors import LeaseLostError
 from services.store.events import add_events
-from services.store.front_codec import encode_front
+from services.store.leases import _RUNNING, _expired, _lease_until, _owned_by, _require_owner
 from services.store.records import (
     ArtifactIn,
     BaselineIn,
-    CheckpointRecord,
-    GenerationIn,
     JobRecord,
     ParetoPointIn,
     ReapReport,
     ResultIn,
 )
 from services.store.repository import get_job
-from services.store.sql import fetch_one, insert_ignoring_duplicates, now_utc, rowcount
+from services.store.sql import now_utc, rowcount
 from services.store.tables import (
     ARTIFACTS,
     BASELINES,
-    CHECKPOINTS,
-    GENERATIONS,
     JOBS,
     PARETO_POINTS,
     RESULTS,
@@ -59,32 +52,6 @@ from services.store.tables import (
     JobStatus,
 )
 from services.store.types import UTCDateTime
-
-_RUNNING = JobStatus.RUNNING
-
-
-def _lease_until(now: datetime, lease_s: float) -> datetime:
-    if lease_s <= 0:
-        raise ValueError(f"lease_s must be > 0, got {lease_s}")
-    return now + timedelta(seconds=lease_s)
-
-
-def _owned_by(job_id: str, worker_id: str) -> ColumnElement[bool]:
-    """The job is running and ``worker_id`` holds its lease."""
-    return and_(JOBS.c.id == job_id, JOBS.c.status == _RUNNING, JOBS.c.lease_owner == worker_id)
-
-
-def _expired(now: datetime) -> ColumnElement[bool]:
-    """The job is running and its lease ran out before ``now``."""
-    return and_(JOBS.c.status == _RUNNING, JOBS.c.lease_expires_at < now)
-
-
-def _require_owner(session: Session, job_id: str, worker_id: str, values: dict[str, Any]) -> None:
-    """UPDATE the job with ``values`` if ``worker_id`` owns it, else raise LeaseLostError."""
-    stmt = update(JOBS).where(_owned_by(job_id, worker_id)).values(**values)
-    if rowcount(session.execute(stmt)) == 0:
-        raise LeaseLostError(f"worker {worker_id!r} does not hold the lease of job {job_id}")
-
 
 # --------------------------------------------------------------------------- claims and leases
 
@@ -159,175 +126,6 @@ def renew_lease(
     )
     flag = session.execute(stmt).first()
     return None if flag is None else bool(flag[0])
-
-
-# --------------------------------------------------------------------------- progress
-
-
-def _finite_or_none(value: float | None) -> float | None:
-    if value is None:
-        return None
-    value = float(value)
-    return value if math.isfinite(value) else None
-
-
-def first_objective(best: Any) -> float | None:
-    """``jobs.best_value``: the number the jobs page sorts "best" by — ``best`` itself or its
-    first element (a job's best objective(s) so far, JSON), None when missing or not finite."""
-    if isinstance(best, list | tuple):
-        best = best[0] if best else None
-    if isinstance(best, bool) or not isinstance(best, int | float):
-        return None
-    return _finite_or_none(best)
-
-
-def _check_owner(session: Session, job_id: str, worker_id: str) -> None:
-    """Raise LeaseLostError unless ``worker_id`` holds the lease of the running job."""
-    owned = session.execute(select(JOBS.c.id).where(_owned_by(job_id, worker_id))).first()
-    if owned is None:
-        raise LeaseLostError(f"worker {worker_id!r} does not hold the lease of job {job_id}")
-
-
-def record_generation(
-    session: Session,
-    job_id: str,
-    worker_id: str,
-    *,
-    generation: int,
-    n_evals: int,
-    best: Any,
-    wall_time_s: float,
-    hypervolume: float | None = None,
-    front: Any = None,
-    now: datetime | None = None,
-) -> bool:
-    """Record one generation and advance the job's progress; idempotent per generation.
-
-    ``front`` (optional, (k, m) array-like) is the objective vectors of the current front, kept
-    (as float64 bytes) for the recording's per-generation Pareto view.
-
-    ``best`` is the best objective(s) so far (a number or a list, JSON); it also becomes the
-    job's ``best_objective`` unless a later generation was already recorded. A generation that
-    already has a row (a resumed job re-running it) is ignored: returns False; True when a row
-    was written. Raises LeaseLostError (writing nothing) if ``worker_id`` lost the lease.
-    """
-    now = now_utc(now)
-    generation = int(generation)
-    advance = (
-        update(JOBS)
-        .where(_owned_by(job_id, worker_id), JOBS.c.progress_generation <= generation)
-        .values(
-            progress_generation=generation,
-            best_objective=best,
-            best_value=first_objective(best),
-        )
-    )
-    if rowcount(session.execute(advance)) == 0:
-        _check_owner(session, job_id, worker_id)  # owner, but a later generation is recorded
-    row = GenerationIn(generation, n_evals, best, wall_time_s, hypervolume, front)
-    return insert_ignoring_duplicates(
-        session, GENERATIONS, _generation_row(job_id, row, now), ("job_id", "generation")
-    )
-
-
-def _generation_row(job_id: str, g: GenerationIn, now: datetime) -> dict[str, Any]:
-    return {
-        "job_id": job_id,
-        "generation": int(g.generation),
-        "n_evals": int(g.n_evals),
-        "best": g.best,
-        "hypervolume": _finite_or_none(g.hypervolume),
-        "wall_time_s": float(g.wall_time_s),
-        "created_at": now,
-        "front_packed": encode_front(g.front),
-    }
-
-
-def record_generations(
-    session: Session,
-    job_id: str,
-    worker_id: str,
-    rows: Sequence[GenerationIn],
-    *,
-    now: datetime | None = None,
-) -> bool:
-    """Record a batch of generations at once (``record_generation`` for many rows: one UPDATE
-    of the job's progress, one multi-row INSERT); returns the job's ``cancel_requested``, read
-    by the same UPDATE, so a worker needs no query of its own to notice a cancellation.
-
-    Generations already recorded (a resumed job re-running them) are skipped. Raises
-    LeaseLostError, writing nothing, if ``worker_id`` lost the lease.
-    """
-    now = now_utc(now)
-    owned = _owned_by(job_id, worker_id)
-    flag = None
-    if rows:
-        last = max(rows, key=lambda g: int(g.generation))
-        advance = (
-            update(JOBS)
-            .where(owned, JOBS.c.progress_generation <= int(last.generation))
-            .values(
-                progress_generation=int(last.generation),
-                best_objective=last.best,
-                best_value=first_objective(last.best),
-            )
-            .returning(JOBS.c.cancel_requested)
-        )
-        flag = session.execute(advance).first()
-    if flag is None:  # nothing to advance, or a later generation is recorded: is it still ours?
-        flag = session.execute(select(JOBS.c.cancel_requested).where(owned)).first()
-        if flag is None:
-            raise LeaseLostError(f"worker {worker_id!r} does not hold the lease of job {job_id}")
-    values = [_generation_row(job_id, g, now) for g in rows]
-    dialect = session.get_bind().dialect.name
-    if values and dialect in ("sqlite", "postgresql"):
-        module = sqlite if dialect == "sqlite" else postgresql
-        stmt = module.insert(GENERATIONS).on_conflict_do_nothing(
-            index_elements=["job_id", "generation"]
-        )
-        session.execute(stmt, values)
-    else:
-        for v in values:
-            insert_ignoring_duplicates(session, GENERATIONS, v, ("job_id", "generation"))
-    return bool(flag[0])
-
-
-def save_checkpoint(
-    session: Session,
-    job_id: str,
-    worker_id: str,
-    *,
-    generation: int,
-    state: bytes,
-    now: datetime | None = None,
-) -> None:
-    """Store the optimiser state after ``generation``, replacing an older checkpoint.
-
-    One checkpoint per job is kept (the latest); a checkpoint older than the stored one is
-    ignored. ``state`` is opaque bytes (the worker chooses the encoding).
-    Raises LeaseLostError (writing nothing) if ``worker_id`` lost the lease.
-    """
-    now = now_utc(now)
-    generation = int(generation)
-    _require_owner(session, job_id, worker_id, {"heartbeat_at": now})
-    replaced = session.execute(
-        update(CHECKPOINTS)
-        .where(CHECKPOINTS.c.job_id == job_id, CHECKPOINTS.c.generation <= generation)
-        .values(generation=generation, state=bytes(state), created_at=now)
-    )
-    if rowcount(replaced) == 0:
-        insert_ignoring_duplicates(
-            session,
-            CHECKPOINTS,
-            {"job_id": job_id, "generation": generation, "state": bytes(state), "created_at": now},
-            ("job_id",),
-        )
-
-
-def latest_checkpoint(session: Session, job_id: str) -> CheckpointRecord | None:
-    """The job's latest checkpoint, or None (start from scratch)."""
-    stmt = select(CHECKPOINTS).where(CHECKPOINTS.c.job_id == job_id)
-    return fetch_one(session, CheckpointRecord, stmt)
 
 
 # --------------------------------------------------------------------------- cancellation

@@ -1,4 +1,4 @@
-"""The jobs page's word search (``services.store.dashboard_queries``) is a substring match on
+"""The jobs page's word search (``services.store.job_search_paging``) is a substring match on
 ``job_labels.search``. Its index is backend-specific, so it is not part of the portable model
 (nor of what autogenerate compares): revision 0009 creates it, and ``create_all`` (the tests)
 through the listeners in ``services.store.tables``.

@@ -42,13 +42,11 @@ from services.store.lifecycle import (
     claim_job,
     fail_job,
     finish_job,
-    latest_checkpoint,
     mark_cancelled,
-    record_generations,
     renew_lease,
-    save_checkpoint,
 )
 from services.store.output_queries import get_hypervolume_ref, set_hypervolume_ref
+from services.store.progress import latest_checkpoint, record_generations, save_checkpoint
 from services.store.quotas import add_cpu_seconds
 from services.store.records import (
     ArtifactIn,

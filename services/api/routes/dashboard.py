@@ -21,10 +21,10 @@ from services.api.dashboard_schemas import (
 from services.api.deps import MAX_OFFSET, Context, CurrentKey
 from services.api.errors import invalid, not_found
 from services.api.lookups import Filters, sync_labels
+from services.api.robot_validation import summarize_robot
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT, ErrorOut
 from services.api.spec_cache import build_robot_cached
 from services.api.study_fits import robot_fits
-from services.api.validation import summarize_robot
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
 from services.store.tables import JobStatus

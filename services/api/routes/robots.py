@@ -10,6 +10,7 @@ from pydantic import BaseModel, Field
 from legcore.robots import LeggedRobot, Robot, catalog
 from services.api.deps import Context, CurrentKey, Pagination
 from services.api.errors import invalid, not_found
+from services.api.robot_validation import RobotInfo, robot_info, summarize_robot
 from services.api.schemas import (
     CatalogEntry,
     ErrorOut,
@@ -30,7 +31,6 @@ from services.api.submission import (
     remember,
     replay_headers,
 )
-from services.api.validation import RobotInfo, robot_info, summarize_robot
 from services.api.validation_pool import check_robot
 from services.store import repository as repo
 from services.store.idempotency import request_fingerprint

@@ -8,8 +8,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, JsonValue, model_validator
 
+from services.api.robot_validation import RobotSummary
 from services.api.schemas.common import RobotDocOut, RobotSpecDoc, RobotSpecOut, _In
-from services.api.validation import RobotSummary
 
 _DH_EXAMPLE: dict[str, JsonValue] = {
     "kind": "dh",

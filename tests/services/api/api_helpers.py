@@ -147,7 +147,8 @@ def finish_like_a_worker(
 ) -> None:
     """Drive a job through the store as a worker would: claim, record generations, finish
     with a result, a Pareto front, a baseline and (optionally) a recording artifact."""
-    from services.store.lifecycle import claim_job, finish_job, record_generation
+    from services.store.lifecycle import claim_job, finish_job
+    from services.store.progress import record_generation
     from services.store.records import ArtifactIn, BaselineIn, ParetoPointIn, ResultIn
 
     with ctx.write() as s:

@@ -18,7 +18,8 @@ from legcore.robots import Robot, catalog
 from legcore.studies.registry import studies
 from services.api.deps import ApiContext
 from services.api.export_formats import csv_cell, encode
-from services.store.lifecycle import claim_job, fail_job, finish_job, record_generation
+from services.store.lifecycle import claim_job, fail_job, finish_job
+from services.store.progress import record_generation
 from services.store.records import BaselineIn, ParetoPointIn, ResultIn
 
 API = "/api/v1"

@@ -13,7 +13,8 @@ import pytest
 from api_helpers import fresh_app
 
 from services.api.deps import ApiContext
-from services.store.lifecycle import claim_job, fail_job, record_generation
+from services.store.lifecycle import claim_job, fail_job
+from services.store.progress import record_generation
 
 API = "/api/v1"
 SPEC: dict[str, Any] = {

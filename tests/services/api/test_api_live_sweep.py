@@ -19,8 +19,9 @@ from services.api.deps import ApiContext
 from services.api.routes import live
 from services.store import repository as repo
 from services.store.keys import generate_api_key
-from services.store.lifecycle import claim_job, fail_job, record_generation, request_cancel
+from services.store.lifecycle import claim_job, fail_job, request_cancel
 from services.store.migrate import upgrade
+from services.store.progress import record_generation
 from services.store.session import reset_engine
 from services.store.settings import get_settings
 

@@ -18,7 +18,7 @@ from store_testdb import sqlite_url
 from services.api.lookups import study_defaults
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
-from services.store.lifecycle import first_objective
+from services.store.progress import first_objective
 from services.store.session import make_engine
 from services.store.tables import JOBS, Base, JobStatus
 

@@ -23,7 +23,8 @@ from services.store import (
     session_scope,
 )
 from services.store.front_codec import decode_front, decode_front_array, encode_front
-from services.store.lifecycle import heartbeat, record_generations, renew_lease
+from services.store.lifecycle import heartbeat, renew_lease
+from services.store.progress import record_generations
 from services.store.records import GenerationIn
 
 T0 = datetime(2026, 3, 1, 8, 0, tzinfo=UTC)

@@ -14,12 +14,8 @@ from legcore.optimizers import to_jsonable
 from legcore.runner import prepare
 from services.store import repository as repo
 from services.store.keys import generate_api_key
-from services.store.lifecycle import (
-    claim_job,
-    latest_checkpoint,
-    requeue_expired,
-    save_checkpoint,
-)
+from services.store.lifecycle import claim_job, requeue_expired
+from services.store.progress import latest_checkpoint, save_checkpoint
 from services.store.session import session_scope
 from services.store.settings import Settings
 from services.store.sql import now_utc

@@ -13,7 +13,8 @@ import pytest
 from services.store import lifecycle
 from services.store import repository as repo
 from services.store.keys import generate_api_key
-from services.store.lifecycle import latest_checkpoint, request_cancel
+from services.store.lifecycle import request_cancel
+from services.store.progress import latest_checkpoint
 from services.store.session import session_scope
 from services.store.settings import Settings
 from services.worker import execute
