@@ -78,6 +78,10 @@ def create_app(
 
     @asynccontextmanager
     async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
+        if threading.current_thread() is threading.main_thread():
+            ctx.warmup.start(settings)  # a server: warm its validation processes
+        else:
+            ctx.warmup.done.set()  # an in-process test client: nothing to warm
         yield
         # A server (uvicorn runs the event loop on the main thread, and re-raises SIGTERM after
         # this, so atexit never runs) stops its validation processes here; an in-process test

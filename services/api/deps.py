@@ -29,6 +29,7 @@ from services.api.rate_limit import (
 )
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT
 from services.api.sweeps import MAX_SWEEP_JOBS
+from services.api.warmup import Warmup
 from services.store.artifacts import ArtifactStore
 from services.store.keys import hash_api_key
 from services.store.records import ApiKeyRecord
@@ -72,6 +73,7 @@ class ApiContext:
     prefix: str = "/api/v1"
     actor: str = field(default_factory=_api_actor)
     rate_limiter: RateLimiter | None = None
+    warmup: Warmup = field(default_factory=Warmup)
     _engine: Engine | None = field(default=None, init=False, repr=False)
     _factory: sessionmaker[Session] | None = field(default=None, init=False, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, init=False, repr=False)

@@ -125,6 +125,12 @@ class Settings(BaseModel):
         description="A worker process loads every compiled kernel (legcore.warmup: one tiny "
         "job per study kind) before it takes its first job, so that job runs warm.",
     )
+    api_warmup: bool = Field(
+        default=True,
+        description="An API server validates one minimal job of every study kind in its "
+        "validation processes right after it starts (services.api.warmup), so that no "
+        "submission waits for a cold validation process; /ready answers 503 until then.",
+    )
 
     # Leases of running jobs.
     lease_seconds: float = Field(default=60.0, gt=0, description="Lease length of a claim.")

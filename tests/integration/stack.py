@@ -239,6 +239,7 @@ class Stack:
             # The worker warm-up (seconds of CPU per worker start) is not under test here and
             # the suites start hundreds of workers; the demo test keeps it on.
             LEGOPT_WORKER_WARMUP="false",
+            LEGOPT_API_WARMUP="false",  # likewise the API's (tests/integration/test_api_warmup.py)
             NUMBA_NUM_THREADS="1",
             PYTHONUNBUFFERED="1",
         )

@@ -1,4 +1,5 @@
-"""``GET /health`` (liveness, no database) and ``GET /ready`` (database and schema)."""
+"""``GET /health`` (liveness, no database) and ``GET /ready`` (database, schema and a warm
+validation)."""
 
 from __future__ import annotations
 
@@ -24,11 +25,25 @@ def health() -> HealthOut:
 @router.get(
     "/ready",
     response_model=ReadyOut,
-    summary="Readiness: database reachable and migrated to the head revision",
-    responses={503: {"model": ErrorOut, "description": "Database unreachable or not migrated."}},
+    summary="Readiness: database migrated, validation warm",
+    responses={
+        503: {
+            "model": ErrorOut,
+            "description": "Database unreachable or not migrated, or the validation processes "
+            "still warming up (a few seconds after start).",
+        }
+    },
 )
 def ready(ctx: Context) -> ReadyOut:
-    """200 when the database answers and its schema is at the head revision, else 503."""
+    """200 when the database answers, its schema is at the head revision and the validation
+    processes are warm (``services.api.warmup``), else 503 saying which."""
+    if not ctx.warmup.done.is_set():
+        raise HTTPException(
+            status.HTTP_503_SERVICE_UNAVAILABLE,
+            "warming up: the validation processes are loading the studies' kernels "
+            "(LEGOPT_API_WARMUP); ready in a few seconds",
+            headers={"Retry-After": "1"},
+        )
     url = ctx.settings.database_url
     try:
         current = migrate.current_revision(url)
@@ -45,4 +60,4 @@ def ready(ctx: Context) -> ReadyOut:
             f"database schema is at revision {current or 'none'}, the code needs {head}: "
             "run `legopt db upgrade`",
         )
-    return ReadyOut(revision=head)
+    return ReadyOut(revision=head, warmup_s=ctx.warmup.seconds)

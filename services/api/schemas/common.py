@@ -181,3 +181,8 @@ class ReadyOut(BaseModel):
 
     status: Literal["ready"] = "ready"
     revision: str
+    warmup_s: float | None = Field(
+        default=None,
+        description="Seconds the validation warm-up at start took (null: none, "
+        "LEGOPT_API_WARMUP off or an in-process app).",
+    )
