@@ -220,6 +220,11 @@ class Client:
         """Delete a finished job and everything stored for it (409 while queued or running)."""
         self._req("DELETE", f"/jobs/{job_id}")
 
+    def delete_sweep(self, sweep_id: str) -> None:
+        """Delete a finished sweep: every job of it with everything stored for them, then the
+        sweep (409 while any of its jobs is queued or running)."""
+        self._req("DELETE", f"/sweeps/{sweep_id}")
+
     def delete_robot(self, robot_id: str) -> None:
         """Delete one of your stored robots (by id)."""
         self._req("DELETE", f"/robots/{quote(robot_id, safe='')}")

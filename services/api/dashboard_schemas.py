@@ -307,7 +307,7 @@ class SweepCell(BaseModel):
 
 class SweepCellsOut(BaseModel):
     """A sweep as a grid of cells; ``best`` names, per column, the index of the best cell
-    (least mean for objectives, largest for the hypervolume)."""
+    (least mean for objectives, largest for a maximised objective and the hypervolume)."""
 
     sweep_id: str
     columns: list[str] = Field(description="The swept paths that make a cell (seed excluded).")

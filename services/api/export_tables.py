@@ -2,9 +2,9 @@
 and label; and a sweep's jobs one row each, beside its cells (``GET /sweeps/{id}/jobs/export``).
 
 A result stores its objectives as the optimiser minimises them (``neg_score``: a maximised
-quantity negated) while a study keys its reported objective values by the quantity's own name
-(``score``); an export shows the quantity once, under its own name and sign
-(:class:`Quantity`), whichever of the two keys holds it.
+quantity negated); an export shows each quantity once, under its own name and sign (``score``,
+positive). A sweep's stat columns already are (``sweep_cells.job_values``, which the job rows
+below use too); a front's and a history's objectives are flipped by :func:`shown_keys`.
 
 Each job's row names its cell (the index of ``GET /sweeps/{id}/cells`` and of the cell export),
 the cell's swept values and the job's seed, and holds the job's own value of every column the
@@ -17,7 +17,6 @@ a result (queued, running, failed, cancelled) has none.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -27,7 +26,7 @@ import numpy as np
 from services.api.deps import ApiContext
 from services.api.lookups import owned_sweep_jobs, study_kind
 from services.api.quantities import describe
-from services.api.sweep_cells import HYPERVOLUME, build_cells
+from services.api.sweep_cells import HYPERVOLUME, build_cells, job_values
 from services.api.sweeps import swept_paths
 from services.store import output_queries as oq
 from services.store import repository as repo
@@ -65,39 +64,25 @@ def shown_keys(names: Sequence[str]) -> tuple[list[str], list[bool]]:
 
 
 class Quantity(NamedTuple):
-    """A column of a sweep's stat table as exported: the result key it is stored under
-    (``key``), the quantity's own name (``name``), whether the stored values are negated
-    (``flipped``) and whether it is a metric (not an objective, not the hypervolume)."""
+    """A column of a sweep's stat table as exported: the quantity's own name (the cell
+    table's column, in its own sign) and whether it is a metric (not an objective, not the
+    hypervolume)."""
 
-    key: str
     name: str
-    flipped: bool
     metric: bool
 
     def value(self, values: Mapping[str, Any]) -> Any:
-        """Its value in ``values`` (by result key), in its own sign (None when absent)."""
-        if self.key in values:
-            v = values[self.key]
-            return -v if self.flipped and isinstance(v, int | float) else v
-        return values.get(self.name)  # keyed by the quantity's own name: its own sign
+        """Its value in a job's ``values`` (None when absent)."""
+        return values.get(self.name)
 
     def samples(self, samples: Mapping[str, Sequence[float]]) -> list[float]:
-        """Its samples (a cell's, by result key), in its own sign."""
-        if self.key in samples:
-            return [-v if self.flipped else v for v in samples[self.key]]
+        """Its samples (a cell's)."""
         return list(samples.get(self.name, []))
 
 
-def quantities(stat_columns: Sequence[str], objective_names: Sequence[str]) -> list[Quantity]:
-    """A sweep's stat columns (``CellTable.stat_columns``) as exported, each quantity once: a
-    metric that is also a (negated) objective is the objective's column."""
-    shown, flip = shown_keys(stat_columns)
-    out: list[Quantity] = []
-    for col, name, flipped in zip(stat_columns, shown, flip, strict=True):
-        if all(name != q.name for q in out):
-            metric = col not in objective_names and col != HYPERVOLUME
-            out.append(Quantity(col, name, flipped, metric))
-    return out
+def quantities(stat_columns: Sequence[str], objective_columns: Sequence[str]) -> list[Quantity]:
+    """A sweep's stat columns (``CellTable.stat_columns``, each quantity once) as exported."""
+    return [Quantity(c, c not in objective_columns and c != HYPERVOLUME) for c in stat_columns]
 
 
 @dataclass
@@ -117,26 +102,15 @@ class SweepJobTable:
     """A sweep's jobs in sweep order with what their rows share: the sweep, its study kind,
     the cell columns (swept paths but the seed), each cell's swept values by cell index, the
     stat columns (the cell table's: objectives, then hypervolume, then metrics) and the
-    objectives' names."""
+    objectives' columns (their own names: ``score``, not ``neg_score``)."""
 
     sweep: SweepRecord
     kind: str | None
     columns: list[str]
     cell_values: dict[int, dict[str, Any]]
     stat_columns: list[str]
-    objective_names: list[str]
+    objective_columns: list[str]
     jobs: list[SweepJob]
-
-
-def _numeric(d: Any) -> dict[str, float]:
-    """The finite numbers of a mapping (what the cell table samples)."""
-    if not isinstance(d, Mapping):
-        return {}
-    return {
-        str(k): float(v)
-        for k, v in d.items()
-        if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-    }
 
 
 def _hypervolume(points: Sequence[ParetoPointRecord], ref: Sequence[float] | None) -> float | None:
@@ -181,10 +155,7 @@ def sweep_job_table(ctx: ApiContext, key_id: str, sweep_id: str) -> SweepJobTabl
         values: dict[str, float] = {}
         brief = results.get(job.id)
         if brief is not None:
-            objectives, metrics = brief
-            if isinstance(objectives, Mapping):
-                values.update(_numeric(objectives.get("values")))
-            values.update(_numeric(metrics))
+            values = job_values(*brief)[2]
             hv = _hypervolume(fronts.get(job.id, []), table.hypervolume_ref)
             if hv is not None:
                 values[HYPERVOLUME] = hv
@@ -195,6 +166,6 @@ def sweep_job_table(ctx: ApiContext, key_id: str, sweep_id: str) -> SweepJobTabl
         columns=table.columns,
         cell_values={c.index: c.values for c in table.cells},
         stat_columns=table.stat_columns,
-        objective_names=table.objective_names,
+        objective_columns=table.objective_columns,
         jobs=rows,
     )

@@ -5,6 +5,11 @@ Hypervolumes of different jobs are comparable only against one reference point, 
 hypervolumes are measured here against a sweep-wide one: ``nadir + 10 %`` of the union of the
 sweep's final fronts (:func:`legcore.metrics.reference_point`), returned with the table. A
 sweep has at most ``MAX_SWEEP_JOBS`` jobs, so this reads all of its fronts at once.
+
+Each quantity is one column, under its own name and in its own sign: a result names a
+maximised objective as the optimiser minimises it (``neg_score``) while the study may key its
+value by the quantity's own name (``score``); the cell's column is ``score``, positive, and
+larger is better (:func:`job_values`, which the sweep job export uses too).
 """
 
 from __future__ import annotations
@@ -19,7 +24,15 @@ import numpy as np
 
 from services.store.records import JobRecord, ParetoPointRecord
 
-__all__ = ["Cell", "CellTable", "HYPERVOLUME", "build_cells", "cell_columns", "mean_sd"]
+__all__ = [
+    "Cell",
+    "CellTable",
+    "HYPERVOLUME",
+    "build_cells",
+    "cell_columns",
+    "job_values",
+    "mean_sd",
+]
 
 #: Column name of the hypervolume in a cell's stats.
 HYPERVOLUME = "hypervolume"
@@ -43,7 +56,9 @@ class Cell:
 @dataclass
 class CellTable:
     """The cells of a sweep, the stat columns (objectives first, then hypervolume, then
-    metrics), the objective names, the best cell per column and the hypervolume reference."""
+    metrics; each quantity once, under its own name), the objective names as the results and
+    fronts store them (``neg_score``), the best cell per column, the hypervolume reference and
+    the objectives' columns (``score``)."""
 
     columns: list[str]
     stat_columns: list[str]
@@ -51,6 +66,7 @@ class CellTable:
     cells: list[Cell]
     best: dict[str, int]
     hypervolume_ref: list[float] | None
+    objective_columns: list[str] = field(default_factory=list)
 
 
 def cell_columns(swept: Sequence[str]) -> list[str]:
@@ -75,6 +91,31 @@ def _numeric(d: Any) -> dict[str, float]:
         for k, v in d.items()
         if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
     }
+
+
+def job_values(objectives: Any, metrics: Any) -> tuple[list[str], list[bool], dict[str, float]]:
+    """One result's ``(objective columns, which are maximised, values)``: each objective under
+    its quantity's own name and in its own sign (``neg_score`` stored as ``neg_score`` is
+    negated; stored under ``score``, the study's key, it is taken as it is), then each finite
+    metric that is not already an objective's column."""
+    from legcore.studies.metric_names import display_objective
+
+    doc = objectives if isinstance(objectives, Mapping) else {}
+    stored = _numeric(doc.get("values"))
+    shown: list[str] = []
+    maximised: list[bool] = []
+    row: dict[str, float] = {}
+    for name in [str(n) for n in doc.get("names") or []]:
+        own = display_objective(name, None)[0]
+        shown.append(own)
+        maximised.append(own != name)
+        if name in stored:
+            row[own] = -stored[name] if own != name else stored[name]
+        elif own in stored:
+            row[own] = stored[own]
+    for k, v in _numeric(metrics).items():
+        row.setdefault(k, v)
+    return shown, maximised, row
 
 
 def _hypervolumes(
@@ -109,10 +150,13 @@ def build_cells(
     swept path; ``results``: ``{job_id: (objectives, metrics)}`` of succeeded jobs
     (``repository.result_briefs``); ``fronts``: their final fronts; ``sense(metric)``: "min"
     or "max" when smaller or larger is better (the best cell of such a metric is named too;
-    objectives are minimised, the hypervolume maximised)."""
+    an objective is best least, a maximised one (``neg_<m>``, shown as ``<m>``) largest, the
+    hypervolume largest)."""
     columns = cell_columns(swept)
     hv, ref = _hypervolumes(fronts)
     names: list[str] = []
+    shown: list[str] = []
+    maximised: list[bool] = []
     metric_names: list[str] = []
     cells: dict[str, Cell] = {}
     for job in jobs:
@@ -128,20 +172,20 @@ def build_cells(
         if brief is None:
             continue
         objectives, metrics = brief
-        obj_values: dict[str, float] = {}
-        if isinstance(objectives, dict):
-            names = names or [str(n) for n in objectives.get("names") or []]
-            obj_values = _numeric(objectives.get("values"))
-        row = {**obj_values, **_numeric(metrics)}
+        job_shown, job_maximised, row = job_values(objectives, metrics)
+        if not names and job_shown:
+            names = [str(n) for n in objectives["names"]]
+            shown, maximised = job_shown, job_maximised
         if job.id in hv:
             row[HYPERVOLUME] = hv[job.id]
         for k in _numeric(metrics):
-            if k not in metric_names and k not in obj_values:
+            if k not in metric_names and k not in job_shown:
                 metric_names.append(k)
         for k, v in row.items():
             cell.samples.setdefault(k, []).append(v)
-    stat_columns = [*names, *([HYPERVOLUME] if hv else []), *metric_names]
-    senses = {n: "min" for n in names} | ({HYPERVOLUME: "max"} if hv else {})
+    stat_columns = [*shown, *([HYPERVOLUME] if hv else []), *metric_names]
+    senses = {n: "max" if up else "min" for n, up in zip(shown, maximised, strict=True)}
+    senses |= {HYPERVOLUME: "max"} if hv else {}
     senses |= {m: s for m in metric_names if m not in senses and (s := sense(m)) in ("min", "max")}
     best: dict[str, int] = {}
     for col, direction in senses.items():
@@ -150,4 +194,4 @@ def build_cells(
         if len({m for m, _ in scored}) > 1:  # a tie everywhere is no "best"
             pick = max(scored) if direction == "max" else min(scored)
             best[col] = pick[1]
-    return CellTable(columns, stat_columns, names, list(cells.values()), best, ref)
+    return CellTable(columns, stat_columns, names, list(cells.values()), best, ref, shown)

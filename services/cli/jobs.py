@@ -1,4 +1,4 @@
-"""`legopt submit | status | results | cancel | sweep | replay`: talk to a running service.
+"""`legopt submit | status | results | cancel | delete | sweep | replay`: talk to a running service.
 
 Every JOB (and SWEEP) argument takes a whole id or any unambiguous prefix of one (the tables
 print the first 8 characters); an unknown or ambiguous prefix exits 2 naming it.
@@ -150,15 +150,20 @@ def cancel(
 
 @app.command()
 def delete(
-    ids: Annotated[list[str], typer.Argument(metavar="JOB...", help="job ids or prefixes")],
+    ids: Annotated[list[str], typer.Argument(metavar="ID...", help="job or sweep ids or prefixes")],
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:
     """Delete finished jobs and everything stored for them (progress, front, result,
-    recording), which frees storage quota; a queued or running job: cancel it first."""
+    recording), which frees storage quota; a sweep: every job of it, then the sweep. A queued
+    or running job (or a sweep with one): cancel it first."""
     with client(url, key) as c:
         for given in ids:
-            _, full = resolve_id(c, given, field="JOB")
+            col, full = resolve_id(c, given, field="ID", collections=("jobs", "sweeps"))
+            if col == "sweeps":
+                api_call(c.delete_sweep, full)
+                console.print(f"sweep {short(full)}: deleted with its jobs")
+                continue
             api_call(c.delete_job, full)
             console.print(f"job {short(full)}: deleted")
 

@@ -274,6 +274,13 @@ def list_sweeps(
     )
 
 
+def delete_sweep(session: Session, sweep_id: str, *, owner_key_id: str | None = None) -> bool:
+    """Delete a sweep's row; True if it existed. Delete its jobs first (``delete_job``): a
+    job's spec is the sweep's base spec with its overrides."""
+    stmt = delete(SWEEPS).where(SWEEPS.c.id == sweep_id, *_owned(SWEEPS, owner_key_id))
+    return rowcount(session.execute(stmt)) > 0
+
+
 # --------------------------------------------------------------------------- jobs
 
 

@@ -1,7 +1,8 @@
 """The researcher's workbench in Chromium (issue 21): a finished job's parameter importance
 drawn per objective; deleting a job from its page (confirmed in a dialog; the jobs list no
 longer has it, the API answers 404 and its artifact files are gone; a running job's delete
-shows the API's 409); the sweep page redrawn from the server's push while the sweep runs."""
+shows the API's 409); deleting a finished sweep from its page (its jobs and their files go
+with it); the sweep page redrawn from the server's push while the sweep runs."""
 
 from __future__ import annotations
 
@@ -134,6 +135,34 @@ def test_deleting_a_running_job_shows_the_409(page: Any, stack: Stack) -> None:
         assert c.job(job_id)["status"] == "running"
         c.cancel(job_id)
     stack.wait_for(job_id, lambda j: j["status"] == "cancelled")
+    assert not page.legopt_errors, page.legopt_errors
+
+
+def test_delete_a_finished_sweep_from_its_page(page: Any, stack: Stack, shots: Path) -> None:
+    sweep = {"base": {**SPEC, "name": "browser sweep to delete"}, "seeds": [1, 2]}
+    with stack.client() as c:
+        created = c.sweep(sweep)
+    sweep_id, job_ids = created["id"], created["job_ids"]
+    for job_id in job_ids:
+        stack.wait_for(job_id, lambda j: j["status"] == "succeeded")
+    assert all(_artifact_files(stack, j) for j in job_ids)
+    page.goto(f"{stack.url}/#/sweep/{sweep_id}")
+    page.wait_for_selector("#overlay-plot[data-sweep-state='finished']")
+    page.click("button[data-action=delete]")
+    page.wait_for_selector("#delete-dialog[open]")
+    message = page.inner_text("#delete-message")
+    assert sweep_id[:8] in message and "2 jobs, finished" in message
+    page.screenshot(path=shots / "delete-sweep-dialog.png")
+    page.click("#delete-confirm")
+    page.wait_for_function("() => location.hash === '#/sweeps'")
+    page.wait_for_selector("#sweeps-table tbody")  # the list is drawn
+    assert page.locator(f"#sweeps-table tr[data-sweep='{sweep_id}']").count() == 0
+    with stack.client() as c:
+        for path in (f"/sweeps/{sweep_id}", *[f"/jobs/{j}" for j in job_ids]):
+            with pytest.raises(ApiError) as gone:
+                c.get(path)
+            assert gone.value.status == 404, path
+    assert all(_artifact_files(stack, j) == [] for j in job_ids)
     assert not page.legopt_errors, page.legopt_errors
 
 

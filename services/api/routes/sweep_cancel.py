@@ -1,25 +1,32 @@
-"""``POST /sweeps/{id}/cancel``: cancel every unfinished job of a sweep in one request.
+"""``POST /sweeps/{id}/cancel``: cancel every unfinished job of a sweep in one request; and
+``DELETE /sweeps/{id}``: delete a finished sweep with its jobs.
 
 One write transaction: the sweep's queued and running jobs are listed, then all go through the
 store's job cancellation at once (``lifecycle.request_cancels``, what ``POST /jobs/{id}/cancel``
 calls for one job): a queued job becomes ``cancelled`` at once, a running one gets
 ``cancel_requested`` and its worker stops after its current generation. Finished jobs are left
 as they are, so the request is idempotent: a repeat cancels nothing more and says so.
+
+``DELETE /sweeps/{id}``: once every job of the sweep finished, deletes each job with its
+artifacts exactly as ``DELETE /jobs/{id}`` does (``job_deletion.delete_jobs``), then the sweep,
+in one transaction; while any job is queued or running, a 409 says how many and to cancel first.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, status
+from fastapi import APIRouter, HTTPException, Response, status
 from pydantic import Field
 from sqlalchemy.orm import Session
 
 from services.api.deps import Context, CurrentKey
 from services.api.errors import not_found
+from services.api.job_deletion import delete_jobs
 from services.api.schemas import ErrorOut, SweepSummary
 from services.store import lifecycle
 from services.store import repository as repo
+from services.store.records import JobRecord
 from services.store.tables import JobStatus
 
 __all__ = ["SweepCancelled", "router", "unfinished_job_ids"]
@@ -93,3 +100,41 @@ def cancel_sweep(sweep_id: str, key: CurrentKey, ctx: Context) -> SweepCancelled
         stopping=len(stopping),
         already_finished=summary.n_jobs - len(cancelled) - len(stopping),
     )
+
+
+@router.delete(
+    "/sweeps/{sweep_id}",
+    status_code=status.HTTP_204_NO_CONTENT,
+    summary="Delete a finished sweep: every job of it and everything stored for them",
+    responses={
+        **_RESPONSES,
+        409: {"model": ErrorOut, "description": "A job of the sweep is still queued or running."},
+    },
+)
+def delete_sweep(sweep_id: str, key: CurrentKey, ctx: Context) -> Response:
+    """Deletes every job of the sweep as ``DELETE /jobs/{id}`` deletes one (its progress,
+    front, result, events and artifact files, which frees storage quota), then the sweep, in
+    one transaction. While any job is queued or running nothing is deleted: a 409 says how
+    many, and ``POST /sweeps/{id}/cancel`` stops them."""
+
+    def find(session: Session) -> tuple[JobRecord, ...]:
+        sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
+        if sweep is None:
+            raise not_found("sweep", sweep_id)
+        jobs = repo.sweep_jobs(session, sweep.id, owner_key_id=key.id)
+        running = sum(not j.is_terminal for j in jobs)
+        if running:
+            raise HTTPException(
+                status.HTTP_409_CONFLICT,
+                f"sweep {sweep.id} has {running} unfinished job{'s' if running > 1 else ''} "
+                f"(queued or running): cancel it first: POST /sweeps/{sweep.id}/cancel",
+            )
+        return jobs
+
+    delete_jobs(
+        ctx,
+        key.id,
+        find,
+        then=lambda session: repo.delete_sweep(session, sweep_id, owner_key_id=key.id),
+    )
+    return Response(status_code=status.HTTP_204_NO_CONTENT)

@@ -39,8 +39,10 @@ _404: dict[int | str, dict[str, Any]] = {
 def get_sweep_cells(sweep_id: str, key: CurrentKey, ctx: Context) -> SweepCellsOut:
     """One cell per combination of swept values (the seed excluded): its jobs, seeds and
     statuses, and for each objective, metric and the hypervolume (against one sweep-wide
-    reference point, given) the mean and sample standard deviation over its succeeded jobs;
-    ``best`` names the best cell per objective (least mean) and hypervolume (largest)."""
+    reference point, given) the mean and sample standard deviation over its succeeded jobs.
+    Each quantity is one column under its own name, in its own sign (a maximised objective,
+    which a result stores negated as ``neg_<m>``, is ``<m>``). ``best`` names the best cell per
+    objective (least mean; largest for a maximised one) and hypervolume (largest)."""
     sweep, table = cell_table(ctx, key.id, sweep_id)
     cells = []
     for c in table.cells:
@@ -63,7 +65,7 @@ def get_sweep_cells(sweep_id: str, key: CurrentKey, ctx: Context) -> SweepCellsO
         sweep_id=sweep.id,
         columns=table.columns,
         stat_columns=quantities(table.stat_columns, study_kind(sweep)),
-        objective_names=table.objective_names,
+        objective_names=table.objective_columns,
         cells=cells,
         best=table.best,
         hypervolume_ref=table.hypervolume_ref,

@@ -828,7 +828,7 @@ export interface SweepCell {
 
 /**
  * A sweep as a grid of cells; ``best`` names, per column, the index of the best cell
- * (least mean for objectives, largest for the hypervolume).
+ * (least mean for objectives, largest for a maximised objective and the hypervolume).
  */
 export interface SweepCellsOut {
   sweep_id: string;

@@ -3,12 +3,16 @@
 // cells overlaid in distinct colours, and a link into each job. Live while it runs: the
 // server pushes the sweep's job counts and progress (GET /sweeps/{id}/events) and the page
 // redraws the progress at once and the cells when a job has finished; where the stream cannot
-// be opened, it polls.
+// be opened, it polls. Delete (DELETE /sweeps/{id}: every job of the sweep with everything
+// stored for it, then the sweep) asks first in a dialog (delete_dialog.js); the API refuses
+// while a job is queued or running (409: cancel it first) and the dialog shows its message;
+// once deleted the page goes to the sweeps list.
 import { api, download } from "../api.js";
 import { keepCurrent } from "../live.js";
 import { COLORS, overlayPlot, purge } from "../plots.js";
 import { Viewer } from "../viewer.js";
 import { badge, bar, fill, h, num, shortId } from "../ui.js";
+import { deleteDialog } from "./delete_dialog.js";
 
 /** @typedef {import("../api_types").SweepCellsOut} SweepCellsOut */
 /** @typedef {import("../api_types").SweepFrontsOut} SweepFrontsOut */
@@ -50,6 +54,18 @@ export async function render(main, sweepId) {
   let viewer = null;
   /** @type {SweepCellsOut | null} */
   let cells = null;
+  /** @type {SweepOut | null} the sweep as last loaded */
+  let shown = null;
+  const dialog = deleteDialog({ title: "Delete this sweep?", after: "#/sweeps",
+    note: "Every job of the sweep is deleted with its trials, front, result, events and artifact "
+      + "files (recordings), then the sweep; this cannot be undone. It frees storage quota." });
+
+  function askDelete() {
+    const finished = shown ? shown.state === "finished" || shown.state === "empty" : true;
+    dialog.ask(`/sweeps/${sweepId}`, `Sweep ${shortId(sweepId)}`
+      + (shown ? ` (${shown.n_jobs} jobs, ${shown.state})` : "")
+      + (finished ? "." : ": some of its jobs have not finished, so the server refuses until the sweep is cancelled."));
+  }
 
   main.append(
     h("div.toolbar", h("h1", `Sweep ${shortId(sweepId)}`), h("span.spacer"),
@@ -59,8 +75,10 @@ export async function render(main, sweepId) {
           `legopt-cells-${shortId(sweepId)}.${f}`) } }, `cells ${f.toUpperCase()}`)),
       ...["csv", "parquet", "json"].map((f) => h("button.secondary", { dataset: { export: `sweep-jobs-${f}` },
         on: { click: () => download(`/sweeps/${sweepId}/jobs/export?format=${f}`,
-          `legopt-sweep-jobs-${shortId(sweepId)}.${f}`) } }, `jobs ${f.toUpperCase()}`))),
-    summary, progress,
+          `legopt-sweep-jobs-${shortId(sweepId)}.${f}`) } }, `jobs ${f.toUpperCase()}`)),
+      h("button.danger", { dataset: { action: "delete" }, title: "Delete the sweep, its jobs and everything stored for them",
+        on: { click: askDelete } }, "Delete")),
+    dialog.el, summary, progress,
     h("div.card", h("h2", "Cells (mean ± sd over seeds)"), h("div.scroll.full", table)),
     h("div.card", h("h2", "Fronts of the chosen cells"), h("p.muted", "Tick cells in the table; click a point to open its job."), plot),
     h("div.card", h("div.toolbar", h("h2", "Recordings of the chosen cells, merged"), h("span.spacer"),
@@ -100,6 +118,7 @@ export async function render(main, sweepId) {
       /** @type {Promise<SweepCellsOut>} */ (api(`/sweeps/${sweepId}/cells`))]);
     if (!alive) return true;
     cells = c;
+    shown = sweep;
     summary.textContent = `${sweep.n_jobs} jobs, ${sweep.state}; swept: ${c.columns.join(", ") || "seeds only"}` +
       (c.hypervolume_ref ? `; hypervolumes against the sweep-wide reference point (${c.hypervolume_ref.map((v) => num(v)).join(", ")})` : "");
     if (!chosen.size) c.cells.slice(0, 4).forEach((cell) => chosen.add(cell.index));
