@@ -1,6 +1,6 @@
 """A job's stored evaluations as the trial table, the parallel-coordinates plot and the
 importance view read them: filter, sort, page, sample. Pure (arrays in, response models out);
-the route reads ``services.store.evaluations.load_evaluations`` and hands it in.
+the route reads ``services.store.evaluations.load_evaluations`` and hands it in (``trial_set``).
 
 Columns are named as on the dashboard: ``trial``, ``generation``, ``cv``, ``f1``… (objectives
 in the front's order, also by their result key, e.g. ``T_1``) and ``x1``… (variables).
@@ -18,6 +18,7 @@ import numpy as np
 from services.api.dashboard_schemas import Quantity, quantities
 from services.api.trial_schemas import TrialColumns, TrialOut, TrialPage, TrialsMeta
 from services.store.evaluations import MAX_STORED_EVALUATIONS, Evaluations
+from services.store.records import JobRecord
 
 
 class TrialQueryError(ValueError):
@@ -105,6 +106,29 @@ class TrialSet:
             "bound": MAX_STORED_EVALUATIONS,
             "generations": sorted({int(g) for g in self.ev.generation.tolist()}),
         }
+
+
+def trial_set(job: JobRecord, ev: Evaluations | None) -> TrialSet:
+    """The trials of ``job`` from its stored evaluations (None: none stored yet, an empty set
+    of the job's width), named by the objectives of the job's facts."""
+    facts = job.facts if isinstance(job.facts, dict) else {}
+    names = tuple(str(n) for n in facts.get("objectives") or ())
+    kind = facts.get("kind") if isinstance(facts.get("kind"), str) else None
+    if ev is None:
+        ev = Evaluations.empty(int(facts.get("n_var") or 0), len(names))
+    return TrialSet(job.id, ev, names, kind)
+
+
+def matching(
+    trials: TrialSet,
+    feasible: bool | None,
+    generation: int | None,
+    ranges: Sequence[str] | None,
+) -> np.ndarray:
+    """Indices of the trials that pass the query's filters (``ranges`` as written,
+    :func:`parse_range`), in trial order; TrialQueryError names a bad one."""
+    parsed = [parse_range(r) for r in ranges or ()]
+    return select(trials, feasible=feasible, generation=generation, ranges=parsed)
 
 
 def select(
@@ -205,6 +229,7 @@ __all__ = [
     "TrialQueryError",
     "TrialSet",
     "ValueRange",
+    "matching",
     "meta_only",
     "order",
     "parse_range",
@@ -213,4 +238,5 @@ __all__ = [
     "trial_columns",
     "trial_page",
     "trial_rows",
+    "trial_set",
 ]

@@ -12,11 +12,12 @@ from fastapi import APIRouter, HTTPException, Query, status
 from fastapi.responses import StreamingResponse
 
 from services.api.convergence import ConvergenceRow, convergence
-from services.api.dashboard_schemas import BaselineMark, named_best
+from services.api.dashboard_schemas import named_best
 from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.errors import VALIDATION_ERROR_SCHEMA, invalid
 from services.api.export_formats import MEDIA_TYPES, ExportFormat, Units, encode, filename
-from services.api.export_tables import quantities, shown_keys, sweep_job_table, unit_of
+from services.api.export_tables import quantities, sweep_job_table, unit_of
+from services.api.job_export_tables import front_table, history_table
 from services.api.lookups import Filters, cell_table, owned_job, study_kind, sync_labels
 from services.api.points import point_metrics
 from services.api.schemas import ErrorOut, objective_names
@@ -62,16 +63,6 @@ def _download(
         media_type=MEDIA_TYPES[fmt],
         headers={"Content-Disposition": f'attachment; filename="{name}"'},
     )
-
-
-def _signed(values: Any, flip: list[bool]) -> list[Any]:
-    return [-v if f and isinstance(v, int | float) else v
-            for v, f in zip(values, flip, strict=False)]  # fmt: skip
-
-
-def _kind(job: Any) -> str | None:
-    facts = job.facts if isinstance(job.facts, dict) else {}
-    return facts.get("kind") if isinstance(facts.get("kind"), str) else None
 
 
 def _first(best: Any) -> Any:
@@ -197,33 +188,8 @@ def export_front(
             f"the metrics of job {job.id}'s front points are being computed: retry shortly",
             headers={"Retry-After": "5"},
         )
-    m = max((len(p.objectives or []) for p in points), default=len(names))
-    names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
-    shown, flip = shown_keys(names)
-    n = max((len(p.x or []) for p in points), default=0)
-    # a metric that is also an objective is the objective's column (one column per quantity)
-    metrics = [k for k in dict.fromkeys(k for v in per_point.values() if v for k in v)
-               if k not in shown]  # fmt: skip
-    columns = ["index", *shown, *[f"metric.{k}" for k in metrics], *[f"x{i + 1}" for i in range(n)],
-               "baseline"]  # fmt: skip
-    kind = _kind(job)
-    units: dict[str, tuple[str, str]] = {c: unit_of(c, kind) for c in shown}
-    units.update({f"metric.{k}": unit_of(k, kind) for k in metrics})
-    rows = [
-        (p.index, *_signed(_pad(p.objectives, m), flip),
-         *[(per_point.get(p.index) or {}).get(k) for k in metrics], *_pad(p.x, n), None)
-        for p in points
-    ]  # fmt: skip
-    for b in baselines:
-        mark = BaselineMark.from_record(b, names)
-        rows.append((None, *_signed(_pad(mark.objectives, m), flip),
-                     *[mark.metrics.get(k) for k in metrics], *[None] * n, b.name))  # fmt: skip
-    return _download(format, "front", job.id, columns, rows, units)
-
-
-def _pad(values: Any, n: int) -> list[Any]:
-    values = list(values or [])
-    return values + [None] * (n - len(values))
+    table = front_table(job, names, points, baselines, per_point)
+    return _download(format, "front", job.id, table.columns, table.rows, table.units)
 
 
 @router.get(
@@ -244,42 +210,18 @@ def export_history(
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
         names = objective_names(repo.get_result_objectives(session, job.id))
-        rows: list[Any] = []
+        generations: list[Any] = []
         conv: list[ConvergenceRow] = []
         after: int | None = None
         while True:
             chunk = repo.list_generations(session, job.id, after=after, limit=1000)
             conv.extend(convergence(session, job.id, chunk, after=after))
-            rows.extend(chunk)
+            generations.extend(chunk)
             if len(chunk) < 1000:
                 break
             after = chunk[-1].generation
-    m = max((len(g.best) if isinstance(g.best, list) else 1 for g in rows), default=len(names))
-    names = names if len(names) == m else [f"f{i + 1}" for i in range(m)]
-    shown, flip = shown_keys(names)
-    several = m > 1
-    columns = ["generation", "n_evals", *[f"best_{n}" for n in shown], "hypervolume",
-               "wall_time_s"]  # fmt: skip
-    if several:
-        columns += [f"front_min_{n}" for n in shown] + [f"compromise_{n}" for n in shown]
-    kind = _kind(job)
-    units: dict[str, tuple[str, str]] = {"wall_time_s": ("s", "wall time of the generation")}
-    for n in shown:
-        unit, label = unit_of(n, kind)
-        units[f"best_{n}"] = (unit, f"best {label} so far")
-        units[f"front_min_{n}"] = (unit, f"least {label} on the generation's front")
-        units[f"compromise_{n}"] = (unit, f"{label} of the reported compromise point")
-
-    def data() -> Iterator[tuple[Any, ...]]:
-        for g, c in zip(rows, conv, strict=True):
-            reported = _pad(g.best if isinstance(g.best, list) else [g.best], m)
-            row = (g.generation, g.n_evals, *_signed(_pad(c.best_so_far, m), flip),
-                   g.hypervolume, g.wall_time_s)  # fmt: skip
-            if several:
-                row = (*row, *_signed(_pad(c.front_min, m), flip), *_signed(reported, flip))
-            yield row
-
-    return _download(format, "history", job.id, columns, data(), units)
+    table = history_table(job, names, generations, conv)
+    return _download(format, "history", job.id, table.columns, table.rows, table.units)
 
 
 @router.get(
@@ -294,7 +236,7 @@ def export_cells(
     """One row per cell: the swept values, job counts, then ``<column>_mean``, ``<column>_sd``
     and ``<column>_n`` of each objective, the hypervolume and each metric."""
     sweep, table = cell_table(ctx, key.id, sweep_id)
-    shown = quantities(table.stat_columns, table.objective_names)
+    shown = quantities(table.stat_columns, table.objective_columns)
     stats = [f"{q.name}_{s}" for q in shown for s in ("mean", "sd", "n")]
     columns = ["cell", *table.columns, "jobs", "succeeded", "seeds", *stats]
     kind = study_kind(sweep)
@@ -332,7 +274,7 @@ def export_sweep_jobs(
     ``metric.<name>``); empty until the job has succeeded — then its progress, times and
     error."""
     table = sweep_job_table(ctx, key.id, sweep_id)
-    shown = quantities(table.stat_columns, table.objective_names)
+    shown = quantities(table.stat_columns, table.objective_columns)
     names = [f"metric.{q.name}" if q.metric else q.name for q in shown]
     units = {n: unit_of(q.name, table.kind) for n, q in zip(names, shown, strict=True)}
     units["cell"] = ("", "index of the job's cell (the cell export's `cell`)")

@@ -19,6 +19,7 @@ from services.api.deps import (
     IdPrefix,
     Pagination,
 )
+from services.api.job_deletion import delete_jobs
 from services.api.lookups import owned_job, robot_lookup
 from services.api.schemas import (
     MAX_LIMIT,
@@ -354,13 +355,5 @@ def cancel_job(job_id: str, key: CurrentKey, ctx: Context) -> JobOut:
 def delete_job(job_id: str, key: CurrentKey, ctx: Context) -> Response:
     """Removes the job's rows (progress, front, result, events) and its artifact files, which
     frees storage quota. A queued or running job must be cancelled first (409)."""
-    with ctx.write() as session:
-        job = owned_job(session, job_id, key.id)
-        if not job.is_terminal:
-            raise HTTPException(
-                status.HTTP_409_CONFLICT,
-                f"job {job.id} is {job.status.value}: cancel it first (POST /jobs/{job.id}/cancel)",
-            )
-        repo.delete_job(session, job.id, owner_key_id=key.id)
-    ctx.artifacts.delete_job(job.id)
+    delete_jobs(ctx, key.id, lambda session: [owned_job(session, job_id, key.id)])
     return Response(status_code=status.HTTP_204_NO_CONTENT)

@@ -19,7 +19,7 @@ from pydantic import BaseModel, Field
 
 from services.api.dashboard_schemas import Quantity, quantities
 from services.api.deps import ApiContext, Context, CurrentKey
-from services.api.lookups import owned_job
+from services.api.lookups import OwnedJob
 from services.api.schemas import ErrorOut
 from services.store import repository as repo
 from services.store.front_codec import decode_front
@@ -86,10 +86,8 @@ def _latest_front(ctx: ApiContext, job_id: str) -> tuple[int | None, list[list[f
     summary="The current front of a job, also while it runs",
     responses=_404,
 )
-async def get_live_front(job_id: str, key: CurrentKey, ctx: Context) -> LiveFrontOut:
+async def get_live_front(job: OwnedJob, ctx: Context) -> LiveFrontOut:
     """The objective vectors of the last stored generation's front (at most 300 points)."""
-    with ctx.read() as session:
-        job = owned_job(session, job_id, key.id)
     generation, points = await run_in_threadpool(_latest_front, ctx, job.id)
     facts = job.facts if isinstance(job.facts, dict) else {}
     names = [str(n) for n in facts.get("objectives") or ()]
@@ -151,12 +149,10 @@ async def _events(ctx: ApiContext, job_id: str) -> AsyncIterator[bytes]:
         429: {"model": ErrorOut, "description": "Too many streams open: poll instead."},
     },
 )
-async def job_events(job_id: str, key: CurrentKey, ctx: Context) -> StreamingResponse:
+async def job_events(job: OwnedJob, ctx: Context) -> StreamingResponse:
     """An ``event: progress`` (``{"status", "generation", "total_generations", "terminal"}``)
     when the stream opens and whenever the job's status or generation changes; the stream ends
     after the job's terminal event (or after ``event_stream_s`` of the settings: reconnect)."""
-    with ctx.read() as session:
-        job = owned_job(session, job_id, key.id)
     if _open.n >= MAX_STREAMS:
         raise HTTPException(
             status.HTTP_429_TOO_MANY_REQUESTS,

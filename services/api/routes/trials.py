@@ -8,25 +8,26 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Query
 from fastapi.concurrency import run_in_threadpool
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse
 
 from services.api.artifact_download import artifact_response
 from services.api.deps import ApiContext, Context, CurrentKey, Pagination
 from services.api.errors import invalid
-from services.api.lookups import owned_job, path_index
+from services.api.lookups import OwnedJob, owned_job, path_index
 from services.api.points import trial_recording
 from services.api.schemas import ErrorOut
 from services.api.trial_schemas import ImportanceOut, TrialColumns, TrialPage
 from services.api.trial_view import (
     TrialQueryError,
     TrialSet,
-    parse_range,
-    select,
+    matching,
     trial_columns,
     trial_page,
+    trial_set,
 )
 from services.lru import BuiltCache
-from services.store.evaluations import Evaluations, load_evaluations
+from services.store.evaluations import load_evaluations
 from services.store.records import JobRecord
 
 router = APIRouter(tags=["dashboard"])
@@ -55,32 +56,18 @@ Ranges = Annotated[
 
 
 def _trials(ctx: ApiContext, job: JobRecord) -> TrialSet:
-    facts = job.facts if isinstance(job.facts, dict) else {}
-    names = tuple(str(n) for n in facts.get("objectives") or ())
-    kind = facts.get("kind") if isinstance(facts.get("kind"), str) else None
-
     def load() -> TrialSet:
         with ctx.read() as session:
-            ev = load_evaluations(session, job.id)
-        if ev is None:
-            ev = Evaluations.empty(int(facts.get("n_var") or 0), len(names))
-        return TrialSet(job.id, ev, names, kind)
+            return trial_set(job, load_evaluations(session, job.id))
 
     if job.status.is_terminal:
         return _finished.get_or_build(job.id, load)
     return load()
 
 
-def _filtered(
-    ctx: ApiContext, job: JobRecord, feasible: bool | None, generation: int | None,
-    ranges: list[str] | None,
-) -> tuple[TrialSet, Any]:  # fmt: skip
-    trials = _trials(ctx, job)
-    try:
-        parsed = [parse_range(r) for r in ranges or ()]
-        return trials, select(trials, feasible=feasible, generation=generation, ranges=parsed)
-    except TrialQueryError as exc:
-        raise invalid(("query", exc.field), str(exc)) from None
+def _invalid(exc: TrialQueryError) -> RequestValidationError:
+    """The 422 of a filter or sort the trials cannot answer, naming its query parameter."""
+    return invalid(("query", exc.field), str(exc))
 
 
 @router.get(
@@ -90,8 +77,7 @@ def _filtered(
     responses=_404,
 )
 async def get_trials(
-    job_id: str,
-    key: CurrentKey,
+    job: OwnedJob,
     ctx: Context,
     page: Pagination,
     feasible: Feasible = None,
@@ -103,16 +89,15 @@ async def get_trials(
 ) -> TrialPage:  # fmt: skip
     """The job's stored evaluations (decision variables, objectives as the front holds them,
     constraint violation), filtered by feasibility, generation and value ranges."""
-    with ctx.read() as session:
-        job = owned_job(session, job_id, key.id)
 
     def work() -> TrialPage:
-        trials, idx = _filtered(ctx, job, feasible, generation, range)
+        trials = _trials(ctx, job)
         try:
+            idx = matching(trials, feasible, generation, range)
             return trial_page(trials, idx, sort=sort, descending=descending,
                               offset=page.offset, limit=page.limit)  # fmt: skip
         except TrialQueryError as exc:
-            raise invalid(("query", exc.field), str(exc)) from None
+            raise _invalid(exc) from None
 
     return await run_in_threadpool(work)
 
@@ -124,8 +109,7 @@ async def get_trials(
     responses=_404,
 )
 async def get_trial_columns(
-    job_id: str,
-    key: CurrentKey,
+    job: OwnedJob,
     ctx: Context,
     feasible: Feasible = None,
     generation: Generation = None,
@@ -134,11 +118,13 @@ async def get_trial_columns(
                                    "evenly strided over the matched ones.")] = 2000,
 ) -> TrialColumns:  # fmt: skip
     """One value list per variable and objective of (a sample of) the matched trials."""
-    with ctx.read() as session:
-        job = owned_job(session, job_id, key.id)
 
     def work() -> TrialColumns:
-        trials, idx = _filtered(ctx, job, feasible, generation, range)
+        trials = _trials(ctx, job)
+        try:
+            idx = matching(trials, feasible, generation, range)
+        except TrialQueryError as exc:
+            raise _invalid(exc) from None
         return trial_columns(trials, idx, max_rows)
 
     return await run_in_threadpool(work)
@@ -154,13 +140,10 @@ _importance: BuiltCache[ImportanceOut] = BuiltCache(16)
     summary="Each decision variable's importance for each objective",
     responses=_404,
 )
-async def get_importance(job_id: str, key: CurrentKey, ctx: Context) -> ImportanceOut:
+async def get_importance(job: OwnedJob, ctx: Context) -> ImportanceOut:
     """A random forest per objective over the stored trials (``services.api.importance``
     says which estimator and how): the share of each variable, summing to 1 per objective."""
     from services.api.importance import importance
-
-    with ctx.read() as session:
-        job = owned_job(session, job_id, key.id)
 
     def work() -> ImportanceOut:
         trials = _trials(ctx, job)
