@@ -118,6 +118,7 @@ def test_openapi_fuzz_finds_no_server_error(kinds: tuple[str, ...], tmp_path: Pa
         _fuzz(targets)
 
 
+@pytest.mark.slow  # the quick lane keeps the hostile bodies of test_api_inputs.py
 @pytest.mark.parametrize("kind", DATABASES)
 def test_openapi_stateful_finds_no_server_error(kind: str, tmp_path: Path) -> None:
     """Schemathesis' stateful phase: call sequences chained by the links it infers (POST

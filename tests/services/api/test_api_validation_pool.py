@@ -99,6 +99,7 @@ def test_validation_runs_in_another_process(
     assert int(match.group(1)) != os.getpid()
 
 
+@pytest.mark.slow  # the quick lane keeps test_validation_runs_in_another_process
 def test_a_crashing_child_is_a_422_and_the_next_request_works(
     client: TestClient, alice: dict[str, str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -111,6 +112,7 @@ def test_a_crashing_child_is_a_422_and_the_next_request_works(
     assert r.status_code == 202, r.text
 
 
+@pytest.mark.slow  # the quick lane keeps test_validation_runs_in_another_process
 def test_an_overrunning_child_is_killed_a_422_and_the_next_request_works(
     impatient: tuple[TestClient, TestClient, dict[str, str]],
     monkeypatch: pytest.MonkeyPatch,
