@@ -33,13 +33,8 @@ from legcore.studies.hexapod_workspace.problem import (
 from legcore.studies.hexapod_workspace.study import STUDY, build
 from legcore.studies.registry import get_study
 
-ROOT = Path(__file__).resolve().parents[3]
+ROOT = Path(__file__).resolve().parents[4]
 ROBOT = catalog.get("citedi_hexapod")
-
-
-@pytest.fixture(scope="module")
-def problem() -> HexapodWorkspaceProblem:
-    return build(ROBOT, Params())
 
 
 def _angle(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

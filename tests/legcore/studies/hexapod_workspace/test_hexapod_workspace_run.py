@@ -21,19 +21,13 @@ from legcore.runner import RunResult
 from legcore.studies.hexapod_workspace.geometry import mirror_front_back
 from legcore.studies.hexapod_workspace.problem import (
     PAPER_TABLE2,
-    HexapodWorkspaceProblem,
     Params,
 )
 from legcore.studies.hexapod_workspace.study import STUDY, build
 from legcore.tripod_stability import tripod_stability
 
-ROOT = Path(__file__).resolve().parents[3]
+ROOT = Path(__file__).resolve().parents[4]
 ROBOT = catalog.get("citedi_hexapod")
-
-
-@pytest.fixture(scope="module")
-def problem() -> HexapodWorkspaceProblem:
-    return build(ROBOT, Params())
 
 
 @pytest.fixture(scope="module")

@@ -18,25 +18,13 @@ from legcore.ik import solve
 from legcore.kinematics import fk, jacobian
 from legcore.manipulability import manipulability
 from legcore.robots import Robot, build_robot, catalog
-from tests.legcore.ik_numeric_helpers import (
+from tests.legcore.ik_numeric.ik_numeric_helpers import (
     PUMA_AWAY,
     UR5_AWAY,
     assert_on_target,
-    panda_dh,
     smooth_path,
     targets_of,
-    ur5_dh,
 )
-
-
-@pytest.fixture(scope="module")
-def ur5() -> Robot:
-    return ur5_dh()
-
-
-@pytest.fixture(scope="module")
-def panda() -> Robot:
-    return panda_dh()
 
 
 def _pinocchio_dls(robot: Robot, T: np.ndarray, q0: np.ndarray) -> np.ndarray:

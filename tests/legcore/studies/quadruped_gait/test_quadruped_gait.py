@@ -25,22 +25,12 @@ from legcore.studies.quadruped_gait.problem import (
 )
 from legcore.studies.quadruped_gait.study import STUDY, build
 from legcore.studies.registry import get_study
-from tests.legcore.studies.quadruped_gait_helpers import (
+from tests.legcore.studies.quadruped_gait.quadruped_gait_helpers import (
     DEFAULT_X,
     NEAR_OPT_X,
     PAPER_WALK_X,
     ROBOT,
 )
-
-
-@pytest.fixture(scope="module")
-def problem():
-    return build(ROBOT, Params())
-
-
-@pytest.fixture(scope="module")
-def default_solution(problem):
-    return problem.solution(DEFAULT_X)
 
 
 # ------------------------------------------------------------------------------------ contract

@@ -17,24 +17,13 @@ from legcore.ik import solve, solve_numeric
 from legcore.ik.sample_kinematics import fk_z, jac_z, z_chain
 from legcore.kinematics import fk, fk_jacobian
 from legcore.robots import Robot, catalog
-from tests.legcore.ik_numeric_helpers import (
+from tests.legcore.ik_numeric.ik_numeric_helpers import (
     TOL,
     assert_on_target,
-    panda_dh,
     scara,
     targets_of,
     ur5_dh,
 )
-
-
-@pytest.fixture(scope="module")
-def ur5() -> Robot:
-    return ur5_dh()
-
-
-@pytest.fixture(scope="module")
-def panda() -> Robot:
-    return panda_dh()
 
 
 def fk_jac_one(  # the reference: plain Python, per sample

@@ -28,7 +28,7 @@ from legcore.studies.path_placement.problem import Params
 from legcore.studies.path_placement.study import STUDY, build
 from legcore.studies.registry import get_study
 
-EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[4] / "examples"
 #: Seed 001's settings (the preset's), for a PUMA 560 that is not the catalog's (no preset)
 SEED: dict[str, Any] = dict(PRESET.params)
 
@@ -36,16 +36,6 @@ SEED: dict[str, Any] = dict(PRESET.params)
 def seed_params(**kw: Any) -> Params:
     """``Params`` with seed 001's settings (the preset) and ``kw``."""
     return Params.model_validate({**SEED, **kw})
-
-
-@pytest.fixture(scope="module")
-def robot() -> Any:
-    return catalog.get("puma560")
-
-
-@pytest.fixture(scope="module")
-def pan(robot: Any) -> Any:
-    return build(robot, Params(path="pan"))
 
 
 def _spec(path: str) -> dict[str, Any]:

@@ -20,7 +20,6 @@ from legcore.energy import electrical_energy
 from legcore.jobspec import parse_job_spec
 from legcore.kinematics import fk
 from legcore.manipulability import manipulability, manipulability_split
-from legcore.robots import catalog
 from legcore.runner import run
 from legcore.studies.path_placement.paths import (
     JAR_DURATION,
@@ -37,16 +36,6 @@ from legcore.studies.path_placement.problem import (
     simplified_workspace,
 )
 from legcore.studies.path_placement.study import build
-
-
-@pytest.fixture(scope="module")
-def robot() -> Any:
-    return catalog.get("puma560")
-
-
-@pytest.fixture(scope="module")
-def pan(robot: Any) -> Any:
-    return build(robot, Params(path="pan"))
 
 
 @pytest.fixture(scope="module")

@@ -20,24 +20,14 @@ from legcore.runner import run
 from legcore.studies.quadruped_gait.problem import Params
 from legcore.studies.quadruped_gait.study import build
 from legcore.studies.registry import get_study
-from tests.legcore.studies.quadruped_gait_helpers import (
+from tests.legcore.studies.quadruped_gait.quadruped_gait_helpers import (
     DEFAULT_X,
     NEAR_OPT_X,
     PAPER_WALK_X,
     ROBOT,
 )
 
-EXAMPLE = Path(__file__).resolve().parents[3] / "examples" / "003_quadruped_gait.yaml"
-
-
-@pytest.fixture(scope="module")
-def problem():
-    return build(ROBOT, Params())
-
-
-@pytest.fixture(scope="module")
-def default_solution(problem):
-    return problem.solution(DEFAULT_X)
+EXAMPLE = Path(__file__).resolve().parents[4] / "examples" / "003_quadruped_gait.yaml"
 
 
 # ------------------------------------------------------------------------- loads and energy
