@@ -5,7 +5,7 @@ frame's z axis; the conventions of :mod:`legcore.kinematics`: joint i's world po
 ``pose_{i-1} · (R_i, p_i) · exp(axis_i q_i)``, Jacobian rows ``[v; ω]`` world-aligned at the
 tool point): :func:`fk_z` (tool pose, a joint a turn of two frame columns instead of Rodrigues
 + a 3×3 product) and :func:`jac_z` (the Jacobian from the frames ``fk_z`` leaves, computed
-only when a step needs it); ``tests/legcore/test_ik_numeric.py`` checks them against
+only when a step needs it); ``tests/legcore/ik_numeric/test_ik_numeric.py`` checks them against
 :func:`legcore.kinematics.fk_jacobian` and a plain per-sample reference.
 :func:`task_error` turns a tool pose into the error of an IK task
 (``TASK_POSITION`` 3, ``TASK_AXIS`` 5, ``TASK_POSE`` 6 rows), :func:`task_rows` gives its

@@ -24,15 +24,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from services.api.deps import ApiContext
-from services.api.lookups import owned_sweep_jobs, study_kind
+from services.api.lookups import sweep_cells
 from services.api.quantities import describe
-from services.api.sweep_cells import HYPERVOLUME, build_cells, job_values
-from services.api.sweeps import swept_paths
-from services.store import output_queries as oq
-from services.store import repository as repo
+from services.api.sweep_cells import HYPERVOLUME, job_values
 from services.store.records import JobRecord, ParetoPointRecord, SweepRecord
-from services.store.specs import shown_value
-from services.store.tables import JobStatus
 
 __all__ = [
     "Quantity",
@@ -130,20 +125,14 @@ def _hypervolume(points: Sequence[ParetoPointRecord], ref: Sequence[float] | Non
 def sweep_job_table(ctx: ApiContext, key_id: str, sweep_id: str) -> SweepJobTable:
     """The caller's sweep ``sweep_id`` (404 when missing or another key's) as one row per job,
     grouped into cells exactly as ``lookups.cell_table`` groups them."""
-    with ctx.read() as session:
-        sweep, jobs = owned_sweep_jobs(session, key_id, sweep_id)
-        done = [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
-        results = repo.result_briefs(session, done)
-        fronts = oq.fronts_of(session, done)
-    axes = sweep.axes if isinstance(sweep.axes, dict) else {}
-    swept = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))
-
-    def value(job: JobRecord, path: str) -> Any:
-        return shown_value(job.spec or sweep.base_spec, job.overrides, path)
-
-    kind = study_kind(sweep)
-    table = build_cells(
-        jobs, value, swept, results, fronts, sense=lambda n: describe(n, kind)["sense"]
+    found = sweep_cells(ctx, key_id, sweep_id)
+    sweep, jobs, results, fronts, kind, table = (
+        found.sweep,
+        found.jobs,
+        found.results,
+        found.fronts,
+        found.kind,
+        found.table,
     )
     where: dict[str, tuple[int, Any]] = {}
     for cell in table.cells:

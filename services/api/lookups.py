@@ -6,6 +6,7 @@ one another."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Annotated, Any
 
 from fastapi import Depends, HTTPException, Query, status
@@ -63,8 +64,22 @@ def owned_sweep_jobs(
     return sweep, list(repo.sweep_jobs(session, sweep.id, owner_key_id=key_id))
 
 
-def cell_table(ctx: ApiContext, key_id: str, sweep_id: str) -> tuple[SweepRecord, CellTable]:
-    """The sweep and its cells (shared by the page and the export)."""
+@dataclass(frozen=True)
+class SweepCells:
+    """A sweep, its jobs (sweep order), the succeeded ones' result briefs and final fronts,
+    its study kind and its cells."""
+
+    sweep: SweepRecord
+    jobs: list[JobRecord]
+    results: dict[str, tuple[Any, Any]]
+    fronts: dict[str, Any]
+    kind: str | None
+    table: CellTable
+
+
+def sweep_cells(ctx: ApiContext, key_id: str, sweep_id: str) -> SweepCells:
+    """The caller's sweep ``sweep_id`` (404 when missing or another key's) and its cells
+    (shared by the sweep page, the cells export and the sweep-jobs export)."""
     with ctx.read() as session:
         sweep, jobs = owned_sweep_jobs(session, key_id, sweep_id)
         done = [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
@@ -80,7 +95,13 @@ def cell_table(ctx: ApiContext, key_id: str, sweep_id: str) -> tuple[SweepRecord
     table = build_cells(
         jobs, value, swept, results, fronts, sense=lambda n: describe(n, kind)["sense"]
     )
-    return sweep, table
+    return SweepCells(sweep, jobs, results, fronts, kind, table)
+
+
+def cell_table(ctx: ApiContext, key_id: str, sweep_id: str) -> tuple[SweepRecord, CellTable]:
+    """The sweep and its cells (the sweep page and the cells export)."""
+    found = sweep_cells(ctx, key_id, sweep_id)
+    return found.sweep, found.table
 
 
 def study_kind(sweep: SweepRecord) -> str | None:
@@ -170,7 +191,9 @@ Filters = Annotated[dq.JobFilter, Depends(job_filter)]
 __all__ = [
     "Filters",
     "OwnedJob",
+    "SweepCells",
     "cell_table",
+    "sweep_cells",
     "job_filter",
     "owned_job",
     "owned_sweep_jobs",

@@ -102,6 +102,27 @@ def export_jobs(
         _save(c, "/export/jobs", {k: v for k, v in params.items() if v}, out, "jobs", None)
 
 
+def _export_one(
+    ident: str,
+    what: str,
+    path: str,
+    format: Format,
+    out: Path | None,
+    url: str | None,
+    key: str | None,
+    *,
+    sweep: bool = False,
+) -> None:
+    """Save the export ``path`` (``{}``: the full id of job — or, with ``sweep``, sweep —
+    ``ident``, an id or prefix) as ``legopt-<what>-<id8>.<format>`` unless ``out``."""
+    with client(url, key) as c:
+        if sweep:
+            _, full = resolve_id(c, ident, field="SWEEP", collections=("sweeps",))
+        else:
+            _, full = resolve_id(c, ident)
+        _save(c, path.format(full), {"format": format.value}, out, what, full)
+
+
 @export_app.command("front")
 def export_front(
     job: Annotated[str, typer.Argument(metavar="JOB", help="job id or prefix")],
@@ -112,9 +133,7 @@ def export_front(
 ) -> None:
     """A job's final Pareto front: index, objectives, each point's metrics (metric.<name>),
     decision variables."""
-    with client(url, key) as c:
-        _, full = resolve_id(c, job)
-        _save(c, f"/jobs/{full}/front/export", {"format": format.value}, out, "front", full)
+    _export_one(job, "front", "/jobs/{}/front/export", format, out, url, key)
 
 
 @export_app.command("history")
@@ -127,10 +146,7 @@ def export_history(
 ) -> None:
     """A job's progress per generation: evaluations, best of each objective so far,
     hypervolume, time (several objectives: each front's minimum and its compromise point)."""
-    with client(url, key) as c:
-        _, full = resolve_id(c, job)
-        params = {"format": format.value}
-        _save(c, f"/jobs/{full}/history/export", params, out, "history", full)
+    _export_one(job, "history", "/jobs/{}/history/export", format, out, url, key)
 
 
 @export_app.command("cells")
@@ -142,9 +158,7 @@ def export_cells(
     key: KeyOpt = None,
 ) -> None:
     """A sweep's cells: swept values, job counts, mean ± sd of every objective and metric."""
-    with client(url, key) as c:
-        _, full = resolve_id(c, sweep, field="SWEEP", collections=("sweeps",))
-        _save(c, f"/sweeps/{full}/cells/export", {"format": format.value}, out, "cells", full)
+    _export_one(sweep, "cells", "/sweeps/{}/cells/export", format, out, url, key, sweep=True)
 
 
 @export_app.command("sweep-jobs")
@@ -157,10 +171,8 @@ def export_sweep_jobs(
 ) -> None:
     """A sweep's jobs, one row each beside its cells: id, cell, swept values, seed, status,
     then each objective, hypervolume and metric of its result (SI units)."""
-    with client(url, key) as c:
-        _, full = resolve_id(c, sweep, field="SWEEP", collections=("sweeps",))
-        params = {"format": format.value}
-        _save(c, f"/sweeps/{full}/jobs/export", params, out, "sweep-jobs", full)
+    path = "/sweeps/{}/jobs/export"
+    _export_one(sweep, "sweep-jobs", path, format, out, url, key, sweep=True)
 
 
 __all__ = ["export_app"]

@@ -12,7 +12,7 @@ physical checks, or the refusal naming the missing capability.
   ground reactions are vertical on feet that move horizontally: they do no work).
 - ``hexapod_workspace``: no robot here has six legs — each is refused by name; a URDF hexapod
   runs here with the feet-fixed check, the parametric one in
-  tests/legcore/studies/test_hexapod_workspace.py.
+  tests/legcore/studies/hexapod_workspace/test_hexapod_workspace.py.
 
 The checks live in :mod:`tests.studies.checks`; tests/studies/test_service_studies.py applies
 them to the same kinds run through the real service.

@@ -20,6 +20,7 @@ from typing import Any
 import pytest
 
 from tests.integration.stack import Stack, embedded_stack
+from tests.web.dashboard_session import logged_in_page
 
 CHROMIUM_ARGS = [
     "--no-sandbox",
@@ -69,3 +70,10 @@ def shots() -> Path:
     """Where the tests write their screenshots."""
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
     return SCREENSHOTS
+
+
+@pytest.fixture(scope="module")
+def page(browser: Any, stack: Stack, shots: Path) -> Iterator[Any]:
+    """A logged-in page of the dashboard, recording the whole module's requests, errors and
+    Content-Security-Policy violations (``tests/web/dashboard_session.py``)."""
+    yield from logged_in_page(browser, stack, shots)

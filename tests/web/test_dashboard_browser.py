@@ -12,7 +12,6 @@ whole, in order."""
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
@@ -28,7 +27,6 @@ from tests.web.dashboard_session import (
     assert_dashboard_csp,
     assert_nothing_left_this_server,
     download,
-    logged_in_page,
 )
 
 pytestmark = pytest.mark.integration
@@ -38,13 +36,6 @@ pytestmark = pytest.mark.integration
 def ids() -> dict[str, str]:
     """The ids of the jobs the tests submit, shared by the tests of this module."""
     return {}
-
-
-@pytest.fixture(scope="module")
-def page(browser: Any, stack: Stack, shots: Path) -> Iterator[Any]:
-    """A logged-in page of the dashboard, recording the whole module's requests, errors and
-    Content-Security-Policy violations (``tests/web/dashboard_session.py``)."""
-    yield from logged_in_page(browser, stack, shots)
 
 
 def test_jobs_front_point_replay_and_csv(

@@ -9,7 +9,6 @@ The tests share one logged-in page (a module fixture): run the module whole, in 
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -26,17 +25,9 @@ from tests.web.dashboard_session import (
     assert_dashboard_csp,
     assert_nothing_left_this_server,
     download,
-    logged_in_page,
 )
 
 pytestmark = pytest.mark.integration
-
-
-@pytest.fixture(scope="module")
-def page(browser: Any, stack: Stack, shots: Path) -> Iterator[Any]:
-    """A logged-in page of the dashboard, recording the whole module's requests, errors and
-    Content-Security-Policy violations (``tests/web/dashboard_session.py``)."""
-    yield from logged_in_page(browser, stack, shots)
 
 
 def _color(page: Any, selector: str, prop: str = "color") -> str:

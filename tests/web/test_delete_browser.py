@@ -29,23 +29,6 @@ RUNNING: dict[str, Any] = {
     "name": "browser workbench running",
     "budget": {"generations": 3000},
 }
-TIMEOUT_MS = 60_000
-
-
-@pytest.fixture(scope="module")
-def page(browser: Any, stack: Stack) -> Any:
-    context = browser.new_context(viewport={"width": 1400, "height": 1000})
-    pg = context.new_page()
-    pg.set_default_timeout(TIMEOUT_MS)
-    pg.legopt_errors = []
-    pg.on("pageerror", lambda exc: pg.legopt_errors.append(str(exc)))
-    pg.goto(stack.url + "/")
-    pg.wait_for_selector("#login[open]")
-    pg.fill("#login-key", stack.key)
-    pg.click("#login-submit")
-    pg.wait_for_selector("#who:text('it')")
-    yield pg
-    context.close()
 
 
 def _finished_job(stack: Stack, spec: dict[str, Any]) -> str:

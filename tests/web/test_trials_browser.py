@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 
 from tests.integration.stack import Stack
+from tests.web.dashboard_session import THREE_OBJECTIVES
 
 pytestmark = pytest.mark.integration
 
@@ -22,23 +23,6 @@ SPEC: dict[str, Any] = {
     "seed": 3,
     "record": False,
 }
-TIMEOUT_MS = 60_000
-
-
-@pytest.fixture(scope="module")
-def page(browser: Any, stack: Stack) -> Any:
-    context = browser.new_context(viewport={"width": 1400, "height": 1000})
-    pg = context.new_page()
-    pg.set_default_timeout(TIMEOUT_MS)
-    pg.legopt_errors = []
-    pg.on("pageerror", lambda exc: pg.legopt_errors.append(str(exc)))
-    pg.goto(stack.url + "/")
-    pg.wait_for_selector("#login[open]")
-    pg.fill("#login-key", stack.key)
-    pg.click("#login-submit")
-    pg.wait_for_selector("#who:text('it')")
-    yield pg
-    context.close()
 
 
 def test_trial_table_parallel_coordinates_and_a_trials_motion(
@@ -108,13 +92,10 @@ def test_trial_table_parallel_coordinates_and_a_trials_motion(
 
 
 THREE: dict[str, Any] = {
+    **THREE_OBJECTIVES,
     "name": "browser steer",
-    "robot": "citedi_hexapod",
-    "problem": {"kind": "hexapod_workspace"},
-    "optimizer": {"kind": "moead", "params": {"n_subproblems": 24, "n_neighbors": 6}},
     "budget": {"generations": 4},
     "seed": 2,
-    "record": False,
 }
 RUNNING: dict[str, Any] = {
     **SPEC,

@@ -9,7 +9,8 @@ from __future__ import annotations
 import asyncio
 import json
 import threading
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
+from functools import partial
 from typing import Any
 
 from fastapi import APIRouter, HTTPException, status
@@ -112,8 +113,11 @@ def _state(ctx: ApiContext, job_id: str) -> dict[str, Any] | None:
     }
 
 
-async def _events(ctx: ApiContext, job_id: str) -> AsyncIterator[bytes]:
-    """``progress`` events (JSON: status, generation) on every change, until the job ends."""
+async def _events(
+    ctx: ApiContext, read: Callable[[], dict[str, Any] | None]
+) -> AsyncIterator[bytes]:
+    """``progress`` events (JSON: ``read()``, run in the thread pool) on every change, until
+    its ``terminal`` is true; ``gone`` when ``read()`` finds nothing (deleted meanwhile)."""
     loop = asyncio.get_running_loop()
     started = last_sent = loop.time()
     previous: dict[str, Any] | None = None
@@ -121,7 +125,7 @@ async def _events(ctx: ApiContext, job_id: str) -> AsyncIterator[bytes]:
     try:
         yield f"retry: {int(1000 * POLL_S * 4)}\n\n".encode()
         while loop.time() - started < ctx.settings.event_stream_s:
-            state = await run_in_threadpool(_state, ctx, job_id)
+            state = await run_in_threadpool(read)
             if state is None:  # deleted meanwhile
                 yield b"event: gone\ndata: {}\n\n"
                 return
@@ -139,6 +143,24 @@ async def _events(ctx: ApiContext, job_id: str) -> AsyncIterator[bytes]:
         _open.add(-1)
 
 
+def _event_stream(
+    ctx: ApiContext, read: Callable[[], dict[str, Any] | None], poll: str
+) -> StreamingResponse:
+    """The Server-Sent Events response of ``_events``; 429 naming ``poll`` (what to poll
+    instead) when ``MAX_STREAMS`` streams are open on this server."""
+    if _open.n >= MAX_STREAMS:
+        raise HTTPException(
+            status.HTTP_429_TOO_MANY_REQUESTS,
+            f"{MAX_STREAMS} event streams are open on this server: poll {poll}",
+            headers={"Retry-After": "5"},
+        )
+    return StreamingResponse(
+        _events(ctx, read),
+        media_type="text/event-stream",
+        headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
+    )
+
+
 @router.get(
     "/jobs/{job_id}/events",
     response_class=StreamingResponse,
@@ -153,17 +175,7 @@ async def job_events(job: OwnedJob, ctx: Context) -> StreamingResponse:
     """An ``event: progress`` (``{"status", "generation", "total_generations", "terminal"}``)
     when the stream opens and whenever the job's status or generation changes; the stream ends
     after the job's terminal event (or after ``event_stream_s`` of the settings: reconnect)."""
-    if _open.n >= MAX_STREAMS:
-        raise HTTPException(
-            status.HTTP_429_TOO_MANY_REQUESTS,
-            f"{MAX_STREAMS} event streams are open on this server: poll GET /jobs/{job.id}",
-            headers={"Retry-After": "5"},
-        )
-    return StreamingResponse(
-        _events(ctx, job.id),
-        media_type="text/event-stream",
-        headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
-    )
+    return _event_stream(ctx, partial(_state, ctx, job.id), f"GET /jobs/{job.id}")
 
 
 # --------------------------------------------------------------------------- a sweep, live
@@ -219,34 +231,6 @@ def _sweep_state(ctx: ApiContext, sweep_id: str, owner_key_id: str) -> dict[str,
     }
 
 
-async def _sweep_events(ctx: ApiContext, sweep_id: str, owner_key_id: str) -> AsyncIterator[bytes]:
-    """``progress`` events (JSON: state, counts, progress) on every change, until the sweep
-    is finished (every job terminal)."""
-    loop = asyncio.get_running_loop()
-    started = last_sent = loop.time()
-    previous: dict[str, Any] | None = None
-    _open.add(1)
-    try:
-        yield f"retry: {int(1000 * POLL_S * 4)}\n\n".encode()
-        while loop.time() - started < ctx.settings.event_stream_s:
-            state = await run_in_threadpool(_sweep_state, ctx, sweep_id, owner_key_id)
-            if state is None:  # deleted meanwhile
-                yield b"event: gone\ndata: {}\n\n"
-                return
-            if state != previous:
-                previous = state
-                last_sent = loop.time()
-                yield f"event: progress\ndata: {json.dumps(state)}\n\n".encode()
-                if state["terminal"]:
-                    return
-            elif loop.time() - last_sent >= KEEPALIVE_S:
-                last_sent = loop.time()
-                yield b": keep-alive\n\n"
-            await asyncio.sleep(POLL_S)
-    finally:
-        _open.add(-1)
-
-
 @router.get(
     "/sweeps/{sweep_id}/events",
     response_class=StreamingResponse,
@@ -270,17 +254,8 @@ async def sweep_events(sweep_id: str, key: CurrentKey, ctx: Context) -> Streamin
         sweep = repo.get_sweep(session, sweep_id, owner_key_id=key.id)
         if sweep is None:
             raise not_found("sweep", sweep_id)
-    if _open.n >= MAX_STREAMS:
-        raise HTTPException(
-            status.HTTP_429_TOO_MANY_REQUESTS,
-            f"{MAX_STREAMS} event streams are open on this server: poll GET /sweeps/{sweep.id}",
-            headers={"Retry-After": "5"},
-        )
-    return StreamingResponse(
-        _sweep_events(ctx, sweep.id, key.id),
-        media_type="text/event-stream",
-        headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
-    )
+    read = partial(_sweep_state, ctx, sweep.id, key.id)
+    return _event_stream(ctx, read, f"GET /sweeps/{sweep.id}")
 
 
 __all__ = ["LiveFrontOut", "router"]

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+import queue
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -229,3 +232,36 @@ def dashboard_env(tmp: Path) -> Iterator[dict[str, Any]]:
             assert execute_job(j, app.settings).status == "succeeded"
         yield {"client": client, "ctx": app.ctx, "job": job_id, "sweep": sweep_id,
                "sweep_jobs": sweep_jobs, **app.keys}  # fmt: skip
+
+
+#: Seed 000's swing of a leg, its score maximised (the optimiser minimises ``neg_score``): a
+#: quantity exported and shown once, in its own sign. Three generations of 12.
+SCORE_SPEC: dict[str, Any] = {
+    "robot": "calderon_leg",
+    "problem": {"kind": "swing_energy", "n_via": 3},
+    "optimizer": {"kind": "ga", "params": {"pop_size": 12, "fitness": "negated"}},
+    "budget": {"generations": 3},
+    "seed": 1,
+    "record": False,
+}
+
+
+def listen_events(client: TestClient, url: str, headers: dict[str, str]) -> queue.Queue[Any]:
+    """Follow a Server-Sent Events stream in a thread: its ``(event, data)``, then
+    ``("closed", None)``."""
+    events: queue.Queue[tuple[str, Any]] = queue.Queue()
+
+    def run() -> None:
+        with client.stream("GET", url, headers=headers) as r:
+            assert r.status_code == 200
+            assert r.headers["content-type"].startswith("text/event-stream")
+            name = None
+            for line in r.iter_lines():
+                if line.startswith("event:"):
+                    name = line[6:].strip()
+                elif line.startswith("data:") and name:
+                    events.put((name, json.loads(line[5:])))
+        events.put(("closed", None))
+
+    threading.Thread(target=run, daemon=True).start()
+    return events

@@ -14,8 +14,12 @@ from fastapi.testclient import TestClient
 
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.cli import jobs as cli_jobs
+from services.client import Client
 from services.store import migrate
 from services.store.settings import Settings
+
+API = "/api/v1"
 
 DB_NAME = "legopt.db"
 
@@ -68,3 +72,22 @@ def alice(ctx: ApiContext) -> dict[str, str]:
 def bob(ctx: ApiContext) -> dict[str, str]:
     """Headers of a second API key."""
     return {"X-API-Key": new_key(ctx, "bob")[0]}
+
+
+@pytest.fixture
+def cli_calls(
+    client: TestClient, alice: dict[str, str], monkeypatch: pytest.MonkeyPatch
+) -> list[str]:
+    """``legopt``'s API client (its job and sweep verbs, ``services.cli.jobs``) talking to
+    the test app (no server), as ``alice``; the requests it makes."""
+    calls: list[str] = []
+
+    def make(_url: str | None, _key: str | None) -> Client:
+        c = Client("http://testserver", alice["X-API-Key"])
+        c.http.close()
+        c.http = TestClient(client.app, base_url=f"http://testserver{API}", headers=alice)
+        c.http.event_hooks["request"].append(lambda r: calls.append(f"{r.method} {r.url.path}"))
+        return c
+
+    monkeypatch.setattr(cli_jobs, "client", make)
+    return calls

@@ -13,28 +13,14 @@ from typing import Any
 
 import pyarrow.parquet as pq
 import pytest
-from fastapi.testclient import TestClient
+from api_helpers import SCORE_SPEC, fresh_app
 
-from services.api.app import create_app
-from services.api.deps import ApiContext
-from services.store import repository as repo
-from services.store.keys import generate_api_key
-from services.store.migrate import upgrade
-from services.store.session import reset_engine
-from services.store.settings import get_settings
 from services.worker.execute import execute_job
 
 pytestmark = pytest.mark.slow
 
 API = "/api/v1"
-SCORE: dict[str, Any] = {
-    "robot": "calderon_leg",
-    "problem": {"kind": "swing_energy", "n_via": 3},
-    "optimizer": {"kind": "ga", "params": {"pop_size": 12, "fitness": "negated"}},
-    "budget": {"generations": 3},
-    "seed": 1,
-    "record": False,
-}
+SCORE = SCORE_SPEC
 TWO: dict[str, Any] = {
     "problem": {"kind": "path_tracking", "objective": "energy_time"},
     "optimizer": {"kind": "nsga2", "params": {"pop_size": 12}},
@@ -46,33 +32,16 @@ TWO: dict[str, Any] = {
 
 @pytest.fixture(scope="module")
 def env(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
-    tmp = tmp_path_factory.mktemp("units")
-    mp = pytest.MonkeyPatch()
-    url = f"sqlite:///{tmp / 'legopt.db'}"
-    mp.setenv("LEGOPT_DATA_DIR", str(tmp))
-    mp.setenv("LEGOPT_DATABASE_URL", url)
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    settings = get_settings()
-    app = create_app(settings, enqueue=lambda _j: None)
-    ctx: ApiContext = app.state.context
-    raw, key_hash = generate_api_key()
-    with ctx.write() as s:
-        repo.create_api_key(s, name="alice", key_hash=key_hash)
-    alice = {"X-API-Key": raw}
-    with TestClient(app) as client:
+    with fresh_app(tmp_path_factory.mktemp("units"), "alice") as fa:
+        client, alice = fa.client, fa.keys["alice"]
         score = client.post(f"{API}/jobs", json=SCORE, headers=alice).json()["id"]
         sweep_spec = {"base": TWO, "seeds": [1, 2], "grid": {"optimizer.params.pop_size": [12, 16]}}
         r = client.post(f"{API}/sweeps", json=sweep_spec, headers=alice)
         assert r.status_code == 202, r.text
         sweep, jobs = r.json()["id"], r.json()["job_ids"]
         for j in [score, *jobs]:
-            assert execute_job(j, settings).status == "succeeded"
+            assert execute_job(j, fa.settings).status == "succeeded"
         yield {"client": client, "alice": alice, "score": score, "sweep": sweep, "two": jobs[0]}
-    mp.undo()
-    get_settings.cache_clear()
-    reset_engine()
 
 
 def _get(env: dict[str, Any], path: str, fmt: str) -> bytes:

@@ -22,21 +22,14 @@ from typing import Any
 
 import pyarrow.parquet as pq
 import pytest
-from api_helpers import DASHBOARD_SPEC, fresh_app
+from api_helpers import DASHBOARD_SPEC, SCORE_SPEC, fresh_app
 
 from services.api.quantities import describe
 
 pytestmark = pytest.mark.slow
 
 API = "/api/v1"
-SCORE: dict[str, Any] = {
-    "robot": "calderon_leg",
-    "problem": {"kind": "swing_energy", "n_via": 3},
-    "optimizer": {"kind": "ga", "params": {"pop_size": 12, "fitness": "negated"}},
-    "budget": {"generations": 3},
-    "seed": 1,
-    "record": False,
-}
+SCORE = SCORE_SPEC
 #: Every export kind, by the file name's ``<what>``: its route, and the study of its data.
 EXPORTS: list[tuple[str, str, str]] = [
     ("jobs", "/export/jobs", ""),

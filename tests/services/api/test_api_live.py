@@ -3,14 +3,11 @@ Server-Sent Events stream that pushes each new generation and ends with the job.
 
 from __future__ import annotations
 
-import json
-import queue
-import threading
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from api_helpers import fresh_app
+from api_helpers import fresh_app, listen_events
 
 from services.api.deps import ApiContext
 from services.store.lifecycle import claim_job, fail_job
@@ -56,22 +53,7 @@ def test_the_live_front_is_the_last_stored_generations(env: dict[str, Any]) -> N
 
 def test_events_push_each_generation_and_end_with_the_job(env: dict[str, Any]) -> None:
     client, alice, job, ctx = env["client"], env["alice"], env["job"], env["ctx"]
-    events: queue.Queue[tuple[str, Any]] = queue.Queue()
-
-    def listen() -> None:
-        with client.stream("GET", f"{API}/jobs/{job}/events", headers=alice) as r:
-            assert r.status_code == 200
-            assert r.headers["content-type"].startswith("text/event-stream")
-            name = None
-            for line in r.iter_lines():
-                if line.startswith("event:"):
-                    name = line[6:].strip()
-                elif line.startswith("data:") and name:
-                    events.put((name, json.loads(line[5:])))
-        events.put(("closed", None))
-
-    t = threading.Thread(target=listen, daemon=True)
-    t.start()
+    events = listen_events(client, f"{API}/jobs/{job}/events", alice)
     first = events.get(timeout=60)  # the state when the stream opens
     assert first[0] == "progress" and first[1]["status"] == "running"
     for g in (1, 2, 3):
@@ -86,7 +68,6 @@ def test_events_push_each_generation_and_end_with_the_job(env: dict[str, Any]) -
     name, data = events.get(timeout=60)
     assert name == "progress" and data["status"] == "failed" and data["terminal"] is True
     assert events.get(timeout=60) == ("closed", None)  # the stream ends with the job
-    t.join(60)
 
 
 def test_events_of_another_key_are_404(env: dict[str, Any]) -> None:

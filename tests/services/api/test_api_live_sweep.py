@@ -5,25 +5,16 @@ page polls)."""
 
 from __future__ import annotations
 
-import json
 import queue
-import threading
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from fastapi.testclient import TestClient
+from api_helpers import fresh_app, listen_events
 
-from services.api.app import create_app
-from services.api.deps import ApiContext
 from services.api.routes import live
-from services.store import repository as repo
-from services.store.keys import generate_api_key
 from services.store.lifecycle import claim_job, fail_job, request_cancel
-from services.store.migrate import upgrade
 from services.store.progress import record_generation
-from services.store.session import reset_engine
-from services.store.settings import get_settings
 
 API = "/api/v1"
 BASE: dict[str, Any] = {
@@ -35,51 +26,13 @@ BASE: dict[str, Any] = {
 
 @pytest.fixture
 def env(tmp_path: Any) -> Iterator[dict[str, Any]]:
-    mp = pytest.MonkeyPatch()
-    url = f"sqlite:///{tmp_path / 'legopt.db'}"
-    mp.setenv("LEGOPT_DATA_DIR", str(tmp_path))
-    mp.setenv("LEGOPT_DATABASE_URL", url)
-    get_settings.cache_clear()
-    reset_engine()
-    upgrade(url)
-    app = create_app(get_settings(), enqueue=lambda _j: None)
-    ctx: ApiContext = app.state.context
-    keys = {}
-    for name in ("alice", "bob"):
-        raw, key_hash = generate_api_key()
-        with ctx.write() as s:
-            repo.create_api_key(s, name=name, key_hash=key_hash)
-        keys[name] = {"X-API-Key": raw}
-    with TestClient(app) as client:
-        r = client.post(
-            f"{API}/sweeps", json={"base": BASE, "seeds": [1, 2]}, headers=keys["alice"]
+    with fresh_app(tmp_path, "alice", "bob") as fa:
+        r = fa.client.post(
+            f"{API}/sweeps", json={"base": BASE, "seeds": [1, 2]}, headers=fa.keys["alice"]
         )
         assert r.status_code == 202, r.text
-        yield {"client": client, "ctx": ctx, "sweep": r.json()["id"], "jobs": r.json()["job_ids"],
-               **keys}  # fmt: skip
-    mp.undo()
-    get_settings.cache_clear()
-    reset_engine()
-
-
-def _listen(client: TestClient, url: str, headers: dict[str, str]) -> queue.Queue[Any]:
-    """Follow the stream in a thread: its events, then ("closed", None)."""
-    events: queue.Queue[tuple[str, Any]] = queue.Queue()
-
-    def run() -> None:
-        with client.stream("GET", url, headers=headers) as r:
-            assert r.status_code == 200
-            assert r.headers["content-type"].startswith("text/event-stream")
-            name = None
-            for line in r.iter_lines():
-                if line.startswith("event:"):
-                    name = line[6:].strip()
-                elif line.startswith("data:") and name:
-                    events.put((name, json.loads(line[5:])))
-        events.put(("closed", None))
-
-    threading.Thread(target=run, daemon=True).start()
-    return events
+        yield {"client": fa.client, "ctx": fa.ctx, "sweep": r.json()["id"],
+               "jobs": r.json()["job_ids"], **fa.keys}  # fmt: skip
 
 
 def _until(events: queue.Queue[Any], pred: Any) -> dict[str, Any]:
@@ -96,7 +49,7 @@ def test_sweep_events_push_counts_and_progress_and_end_with_the_sweep(
 ) -> None:
     client, alice, ctx, sweep = env["client"], env["alice"], env["ctx"], env["sweep"]
     first_job, second_job = env["jobs"]
-    events = _listen(client, f"{API}/sweeps/{sweep}/events", alice)
+    events = listen_events(client, f"{API}/sweeps/{sweep}/events", alice)
     first = _until(events, lambda d: True)  # the state when the stream opens
     assert first["state"] == "queued" and first["n_jobs"] == 2 and first["terminal"] is False
     assert first["counts"]["queued"] == 2 and first["progress"] == 0.0
@@ -127,7 +80,7 @@ def test_a_finished_sweep_answers_one_event_and_ends(env: dict[str, Any]) -> Non
     with ctx.write() as s:
         for job in env["jobs"]:
             request_cancel(s, job)
-    events = _listen(client, f"{API}/sweeps/{sweep}/events", alice)
+    events = listen_events(client, f"{API}/sweeps/{sweep}/events", alice)
     name, data = events.get(timeout=60)
     assert name == "progress" and data["state"] == "finished" and data["terminal"] is True
     assert events.get(timeout=60) == ("closed", None)

@@ -63,11 +63,12 @@ def test_over_the_memory_limit_is_422_naming_the_fields(
     assert sent == []
 
 
-def test_within_the_memory_limit_is_accepted(
-    low_client: TestClient, alice: dict[str, str]
-) -> None:
-    small = {**SPEC, "problem": {"kind": "swing_energy"}, "optimizer": {
-        "kind": "ga", "params": {"pop_size": 50}}}
+def test_within_the_memory_limit_is_accepted(low_client: TestClient, alice: dict[str, str]) -> None:
+    small = {
+        **SPEC,
+        "problem": {"kind": "swing_energy"},
+        "optimizer": {"kind": "ga", "params": {"pop_size": 50}},
+    }
     r = low_client.post(f"{API}/jobs", json=small, headers=alice)
     assert r.status_code == 202, r.text
 
@@ -76,9 +77,12 @@ def test_default_limit_accepts_the_largest_chunked_job(
     client: TestClient, alice: dict[str, str]
 ) -> None:
     """Chunked evaluation bounds the peak: 2000 individuals × 6001 samples fit 2 GiB."""
-    big = {**SPEC, "problem": {"kind": "swing_energy", "dt": 0.0005},
-           "optimizer": {"kind": "ga", "params": {"pop_size": 2000}},
-           "budget": {"generations": 1}}
+    big = {
+        **SPEC,
+        "problem": {"kind": "swing_energy", "dt": 0.0005},
+        "optimizer": {"kind": "ga", "params": {"pop_size": 2000}},
+        "budget": {"generations": 1},
+    }
     assert job_size(prepare(big)).peak_bytes < 1024 * 1024**2
     r = client.post(f"{API}/jobs", json=big, headers=alice)
     assert r.status_code == 202, r.text

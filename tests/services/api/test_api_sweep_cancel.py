@@ -4,7 +4,6 @@ key gets 404; ``legopt cancel SWEEP`` makes that one request."""
 
 from __future__ import annotations
 
-import pytest
 from api_helpers import finish_like_a_worker
 from fastapi.testclient import TestClient
 from typer.testing import CliRunner
@@ -12,8 +11,6 @@ from typer.testing import CliRunner
 from legcore.studies.registry import studies
 from services.api.deps import ApiContext
 from services.cli import app as cli_app
-from services.cli import jobs as cli_jobs
-from services.client import Client
 from services.store import repository as repo
 from services.store.events import list_events
 from services.store.lifecycle import claim_job
@@ -84,24 +81,6 @@ def test_running_jobs_are_asked_to_stop_and_finished_ones_are_left(
     ]  # fmt: skip
     again = client.post(f"{API}/sweeps/{sweep_id}/cancel", headers=alice).json()
     assert (again["cancelled"], again["stopping"], again["already_finished"]) == (0, 1, 3)
-
-
-@pytest.fixture
-def cli_calls(
-    client: TestClient, alice: dict[str, str], monkeypatch: pytest.MonkeyPatch
-) -> list[str]:
-    """``legopt``'s API client talking to the test app (no server); the requests it makes."""
-    calls: list[str] = []
-
-    def make(_url: str | None, _key: str | None) -> Client:
-        c = Client("http://testserver", alice["X-API-Key"])
-        c.http.close()
-        c.http = TestClient(client.app, base_url=f"http://testserver{API}", headers=alice)
-        c.http.event_hooks["request"].append(lambda r: calls.append(f"{r.method} {r.url.path}"))
-        return c
-
-    monkeypatch.setattr(cli_jobs, "client", make)
-    return calls
 
 
 def test_the_cli_cancels_a_sweep_in_one_request(

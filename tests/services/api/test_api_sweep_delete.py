@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
 from api_helpers import finish_like_a_worker
 from fastapi.testclient import TestClient
 from typer.testing import CliRunner
@@ -16,8 +15,6 @@ from typer.testing import CliRunner
 from legcore.studies.registry import studies
 from services.api.deps import ApiContext
 from services.cli import app as cli_app
-from services.cli import jobs as cli_jobs
-from services.client import Client
 from services.store.lifecycle import claim_job, fail_job
 from services.store.settings import Settings
 
@@ -136,24 +133,6 @@ def test_the_job_delete_still_refuses_an_unfinished_job(
     assert client.delete(f"{API}/jobs/{first}", headers=alice).status_code == 204
     assert _files(settings, first) == []
     assert client.get(f"{API}/sweeps/{sweep_id}", headers=alice).json()["n_jobs"] == 1
-
-
-@pytest.fixture
-def cli_calls(
-    client: TestClient, alice: dict[str, str], monkeypatch: pytest.MonkeyPatch
-) -> list[str]:
-    """``legopt``'s API client talking to the test app (no server); the requests it makes."""
-    calls: list[str] = []
-
-    def make(_url: str | None, _key: str | None) -> Client:
-        c = Client("http://testserver", alice["X-API-Key"])
-        c.http.close()
-        c.http = TestClient(client.app, base_url=f"http://testserver{API}", headers=alice)
-        c.http.event_hooks["request"].append(lambda r: calls.append(f"{r.method} {r.url.path}"))
-        return c
-
-    monkeypatch.setattr(cli_jobs, "client", make)
-    return calls
 
 
 def test_the_cli_deletes_a_sweep_and_a_job_by_prefix(

@@ -39,8 +39,12 @@ def stored(client: TestClient, alice: dict[str, str]) -> dict[str, str]:
     root = require_erd()
     ids = {}
     for name, (file_key, extra) in MATRIX_ROBOTS.items():
-        spec = {"kind": "urdf", "name": name, "urdf": (root / ERD_URDF[file_key]).read_text(),
-                **extra}
+        spec = {
+            "kind": "urdf",
+            "name": name,
+            "urdf": (root / ERD_URDF[file_key]).read_text(),
+            **extra,
+        }
         r = client.post(f"{API}/robots", json={"name": name, "spec": spec}, headers=alice)
         assert r.status_code == 201, r.text
         ids[name] = r.json()["id"]
@@ -48,8 +52,9 @@ def stored(client: TestClient, alice: dict[str, str]) -> dict[str, str]:
 
 
 @pytest.fixture
-def cli(client: TestClient, alice: dict[str, str],
-        monkeypatch: pytest.MonkeyPatch) -> Iterator[CliRunner]:
+def cli(
+    client: TestClient, alice: dict[str, str], monkeypatch: pytest.MonkeyPatch
+) -> Iterator[CliRunner]:
     """A CLI runner whose API client talks to the in-process app."""
 
     def make(url: str | None, key: str | None) -> Client:
@@ -74,8 +79,11 @@ def test_every_place_gives_the_submissions_answer(
     kinds = sorted(studies())
     listing = client.get(f"{API}/studies", headers=alice).json()
     robots = {**{n: n for n in catalog.names()}, **stored}  # name -> what a spec takes
-    by_study = {(it["kind"], r["robot"]): _verdict(r["accepted"], r.get("field"), r["reason"])
-                for it in listing["items"] for r in it["robots"]}
+    by_study = {
+        (it["kind"], r["robot"]): _verdict(r["accepted"], r.get("field"), r["reason"])
+        for it in listing["items"]
+        for r in it["robots"]
+    }
     out = cli.invoke(cli_app, ["studies", "--json"])
     assert out.exit_code == 0, out.output
     assert json.loads(out.output)["items"] == listing["items"]  # what `legopt studies` shows
@@ -83,17 +91,22 @@ def test_every_place_gives_the_submissions_answer(
     for name, ident in robots.items():
         detail = client.get(f"{API}/robots/{ident}", headers=alice).json()
         page = client.get(f"{API}/dashboard/robots/{ident}", headers=alice).json()
-        from_detail = {f["kind"]: _verdict(f["accepted"], f["field"], f["reason"])
-                       for f in detail["studies"]}
-        from_page = {f["kind"]: _verdict(f["accepts"], f["field"], f["reason"])
-                     for f in page["studies"]}
+        from_detail = {
+            f["kind"]: _verdict(f["accepted"], f["field"], f["reason"]) for f in detail["studies"]
+        }
+        from_page = {
+            f["kind"]: _verdict(f["accepts"], f["field"], f["reason"]) for f in page["studies"]
+        }
         show = cli.invoke(cli_app, ["robots", "show", ident])
         assert show.exit_code == 0, show.output
         for kind in kinds:
             verdict = by_study[(kind, name)]
             assert from_detail[kind] == verdict == from_page[kind], (name, kind)
-            r = client.post(f"{API}/jobs", json={"robot": ident, "problem": {"kind": kind},
-                                                 "budget": {"generations": 1}}, headers=alice)
+            r = client.post(
+                f"{API}/jobs",
+                json={"robot": ident, "problem": {"kind": kind}, "budget": {"generations": 1}},
+                headers=alice,
+            )
             accepted, field, reason = verdict
             if accepted:
                 assert r.status_code == 202, (name, kind, r.text)
