@@ -24,9 +24,9 @@ from pydantic import TypeAdapter
 from legcore.robots.legged import LeggedRobot
 from legcore.robots.model import Robot, chain_from_model
 from legcore.robots.spec import DHRobotSpec, RobotSpec, URDFRobotSpec
-from legcore.robots.urdf_build import build_urdf as _build_urdf
 from legcore.robots.urdf_build import motor_arrays
 from legcore.robots.urdf_parse import reject_declarations
+from legcore.robots.urdf_robot import build_urdf as _build_urdf
 
 __all__ = [
     "build_any_robot",

@@ -3,18 +3,36 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from legcore.energy import integrate, joules_to_kwh
+from legcore.robots.model import Robot
 from legcore.studies.path_placement.joints import gradient
+from legcore.studies.path_placement.params import Params
+from legcore.studies.path_placement.paths import ToolPath
+from legcore.studies.path_placement.region import Region
 from legcore.studies.study import Motion, Solution
 from legcore.studies.task import Violation
 
-if TYPE_CHECKING:
-    from legcore.studies.path_placement.problem import PathPlacementProblem
+
+class PathPlacementProblem(Protocol):
+    """What the decoding reads of the study's problem
+    (:class:`legcore.studies.path_placement.problem.PathPlacementProblem`, which imports this
+    module: a protocol, not an import, so the two are no circle)."""
+
+    robot: Robot
+    params: Params
+    path: ToolPath
+    closed_form: bool
+    energy_kind: str
+    workspace: Region
+    w_max: float
+    P_n: float
+    torque: bool
+    constraint_names: tuple[str, ...]
 
 __all__ = ["metrics", "motion", "solution", "violations"]
 
