@@ -80,13 +80,18 @@ export function trialsCard(jobId, onPick) {
     q.set("offset", String(offset));
     q.set("limit", String(PAGE));
     try {
+      // both requested at once: the table draws as soon as its page is in
+      const filters = query();
+      filters.set("max_rows", String(MAX_LINES));
+      /** @type {Promise<TrialColumns>} */
+      const columns = api(`/jobs/${jobId}/trials/columns?${filters}`);
+      columns.catch(() => undefined); // awaited below; not an unhandled rejection if /trials fails first
       /** @type {TrialPage} */
       const page = await api(`/jobs/${jobId}/trials?${q}`);
       fill(error);
       sortOptions(page.objectives, page.variables);
       drawTable(page);
-      /** @type {TrialColumns} */
-      const cols = await api(`/jobs/${jobId}/trials/columns?${query()}&max_rows=${MAX_LINES}`);
+      const cols = await columns;
       drawParallel(cols);
     } catch (err) {
       fill(error, errorText(err));
