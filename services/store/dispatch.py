@@ -96,12 +96,12 @@ def claim_sends(
         due = due.where(JOBS.c.id.in_(list(job_ids)))
     ids.extend(session.execute(due.order_by(JOBS.c.dispatch_due_at).limit(limit)).scalars())
     if stale_before is not None and stale_limit > 0 and job_ids is None:
+        # not those the due path above took: with ``resend`` the due ones, without it the new
+        # ones (a sent job past its timed re-send is only re-sent here: it may have been lost)
+        not_taken = JOBS.c.dispatch_due_at > now if resend else JOBS.c.dispatch_count > 0
         stale = (
             select(JOBS.c.id)
-            .where(
-                and_queued(JOBS.c.last_dispatch_at < stale_before),
-                JOBS.c.dispatch_due_at > now,
-            )
+            .where(and_queued(JOBS.c.last_dispatch_at < stale_before), not_taken)
             .order_by(JOBS.c.last_dispatch_at)
             .limit(stale_limit)
         )

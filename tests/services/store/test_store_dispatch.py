@@ -159,6 +159,25 @@ def test_lost_messages_are_resent_only_for_the_missing_count(engine: Engine) -> 
     assert len(broker.sent) == 7  # two re-sends, not five
 
 
+def test_a_lost_message_is_resent_once_its_timed_resend_is_past(engine: Engine) -> None:
+    """CI found jobs queued forever after a Redis restart: their messages were lost while the
+    broker was down, and by the time it was back their timed re-send was past due — the due
+    path skips sent jobs while the broker can tell its depth, and the lost-message path skipped
+    due ones. A lost message is re-sent whatever its timer says."""
+    ids = _jobs(engine, 3)
+    broker = FakeBroker()
+    _pass(engine, broker, T0)
+    broker.lose()  # Redis killed with the three messages in it
+    broker.down = True
+    t = T0 + timedelta(seconds=3 * LEASE)  # past the first timed re-send (2 leases)
+    _pass(engine, broker, t)  # down: the timed re-send fails and is given back
+    broker.down = False
+    _pass(engine, broker, t + timedelta(seconds=1))  # back: three missing (maybe in flight)
+    assert broker.queue == []
+    _pass(engine, broker, t + timedelta(seconds=LEASE + 1))  # a lease after the last attempt
+    assert sorted(broker.queue) == sorted(ids)  # still missing: lost, re-sent
+
+
 def test_a_message_taken_but_not_yet_claimed_is_not_resent(engine: Engine) -> None:
     """A worker has taken a message and not yet committed its claim: for that one pass the
     broker holds one message fewer than there are queued jobs sent. Not a loss."""
