@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import hashlib
 import re
+import shutil
 import signal
 import subprocess
+import tempfile
 import time
 from collections.abc import Iterator
 from datetime import UTC, datetime
@@ -55,18 +57,28 @@ class TwoHosts(Stack):
         )
         for name in ("AWS_PROFILE", "AWS_SESSION_TOKEN", "AWS_ENDPOINT_URL"):
             self.env.pop(name, None)
+        self.tmpdirs: list[Path] = []
         self.env.update(self._private("api-host"))
         self.hosts: dict[int, str] = {}  # worker pid -> host name
 
     def _private(self, host: str) -> dict[str, str]:
         root = self.tmp / host
-        for sub in ("data", "artifacts", "tmp"):
+        for sub in ("data", "artifacts"):
             (root / sub).mkdir(parents=True, exist_ok=True)
+        # a short temporary directory of its own: the validation forkserver's Unix socket lives
+        # there, and a socket path may not exceed 107 bytes (pytest's tmp_path can)
+        tmp = Path(tempfile.mkdtemp(prefix=f"legopt-{host}-"))
+        self.tmpdirs.append(tmp)
         return {
             "LEGOPT_DATA_DIR": str(root / "data"),
             "LEGOPT_ARTIFACT_DIR": str(root / "artifacts"),
-            "TMPDIR": str(root / "tmp"),
+            "TMPDIR": str(tmp),
         }
+
+    def stop(self) -> None:
+        super().stop()
+        for tmp in self.tmpdirs:
+            shutil.rmtree(tmp, ignore_errors=True)
 
     def start_host_worker(self, host: str) -> subprocess.Popen[bytes]:
         """A solo worker on "host" ``host`` (its own directories); returns once it is ready."""
@@ -136,10 +148,11 @@ def _artifacts_match(st: TwoHosts, view: DbView, job_ids: list[str]) -> None:
             served = c.recording(job_id)
             assert hashlib.sha256(served).hexdigest() == recorded[(job_id, "recording")]
             assert c.result(job_id)["objectives"] is not None  # from the database
+    roots = [*(st.tmp / host for host in ("api-host", *st.hosts.values())), *st.tmpdirs]
     on_disk = [
         p
-        for host in ("api-host", *st.hosts.values())
-        for p in (st.tmp / host).rglob("*")
+        for root in roots
+        for p in root.rglob("*")
         if p.is_file() and any(j in str(p) for j in job_ids)
     ]
     assert not on_disk, f"artifacts left on a host's private disk: {on_disk}"
@@ -201,6 +214,8 @@ def test_a_sweep_across_two_hosts_and_a_killed_host_resumes_on_the_other(
         generation = int(re.search(r"generation (\d+)", resumed[0]).group(1))  # type: ignore[union-attr]
         assert generation >= 3, resumed
         _artifacts_match(st, view, [long_id])
+    except Exception as exc:  # a failure says what the hosts logged
+        raise AssertionError(f"{type(exc).__name__}: {exc}\n{st.log_tail()}") from exc
     finally:
         monitor.stop()
         view.close()
