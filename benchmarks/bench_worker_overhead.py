@@ -54,11 +54,11 @@ def _new_job(spec: dict[str, Any], key_id: str) -> str:
 
 
 def _artifact_sizes(job_id: str) -> dict[str, int]:
-    from services.store import repository as repo
+    from services.store import output_queries as oq
     from services.store.session import session_scope
 
     with session_scope() as s:
-        return {a.kind: a.size_bytes for a in repo.list_artifacts(s, job_id)}
+        return {a.kind: a.size_bytes for a in oq.list_artifacts(s, job_id)}
 
 
 def bench(path: str, pairs: int) -> dict[str, Any]:

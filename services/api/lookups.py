@@ -83,7 +83,7 @@ def sweep_cells(ctx: ApiContext, key_id: str, sweep_id: str) -> SweepCells:
     with ctx.read() as session:
         sweep, jobs = owned_sweep_jobs(session, key_id, sweep_id)
         done = [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
-        results = repo.result_briefs(session, done)
+        results = oq.result_briefs(session, done)
         fronts = oq.fronts_of(session, done)
     axes = sweep.axes if isinstance(sweep.axes, dict) else {}
     swept = swept_paths(axes.get("grid"), axes.get("list"), axes.get("seeds"))

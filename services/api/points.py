@@ -76,7 +76,7 @@ def _point_error(exc: Exception) -> HTTPException:
 def _attempt_dir(ctx: ApiContext, job_id: str) -> str | None:
     """The attempt directory of the job's stored result (``<job>/<attempt>/result.json``)."""
     with ctx.read() as session:
-        art = repo.get_artifact(session, job_id, "result")
+        art = oq.get_artifact(session, job_id, "result")
     if art is None:
         return None
     parts = art.relative_path.split("/")
@@ -99,7 +99,7 @@ def _fronts(ctx: ApiContext, job_id: str) -> dict[int, Any] | None:
     after: int | None = None
     with ctx.read() as session:
         while len(fronts) < MAX_FRONT_GENERATIONS:
-            rows = repo.list_generations(session, job_id, after=after, limit=1000)
+            rows = oq.list_generations(session, job_id, after=after, limit=1000)
             for g in rows:
                 if g.front:
                     fronts[g.generation] = np.asarray(g.front, dtype=float)
@@ -114,7 +114,7 @@ def point_recording(ctx: ApiContext, job: JobRecord, k: int) -> ArtifactRecord:
     404 for no such point, 409 when the point cannot be decoded, 503 while it is being made."""
     kind = point_kind(k)
     with ctx.read() as session:
-        existing = repo.get_artifact(session, job.id, kind)
+        existing = oq.get_artifact(session, job.id, kind)
         point = oq.get_pareto_point(session, job.id, k)
     existing = _still_stored(ctx, existing)
     if existing is not None:
@@ -160,7 +160,7 @@ def trial_recording(ctx: ApiContext, job: JobRecord, t: int) -> ArtifactRecord:
         )
     kind = trial_kind(t)
     with ctx.read() as session:
-        existing = repo.get_artifact(session, job.id, kind)
+        existing = oq.get_artifact(session, job.id, kind)
     existing = _still_stored(ctx, existing)
     if existing is not None:
         return existing
@@ -185,7 +185,7 @@ def baseline_recording(ctx: ApiContext, job: JobRecord, name: str) -> ArtifactRe
     baseline as its motion), made first if needed; 404 for no such baseline, 409 when it
     cannot be decoded again, 503 while it is being made."""
     with ctx.read() as session:
-        names = [b.name for b in repo.list_baselines(session, job.id)]
+        names = [b.name for b in oq.list_baselines(session, job.id)]
     if name not in names:
         known = ", ".join(sorted(names)) or "none"
         raise HTTPException(
@@ -193,7 +193,7 @@ def baseline_recording(ctx: ApiContext, job: JobRecord, name: str) -> ArtifactRe
         )
     kind = baseline_kind(names, name)
     with ctx.read() as session:
-        existing = repo.get_artifact(session, job.id, kind)
+        existing = oq.get_artifact(session, job.id, kind)
     existing = _still_stored(ctx, existing)
     if existing is not None:
         return existing
@@ -216,12 +216,12 @@ def _solution_recording(
         from services.recording.point import PointError, write_point_recording
 
         with ctx.read() as session:
-            done = repo.get_artifact(session, job.id, kind)
+            done = oq.get_artifact(session, job.id, kind)
             if done is not None:
                 return done
             spec = repo.job_spec(session, job)
-            result = repo.get_result(session, job.id)
-            points = repo.list_pareto(session, job.id)
+            result = oq.get_result(session, job.id)
+            points = oq.list_pareto(session, job.id)
         summary = result.summary if result is not None and isinstance(result.summary, dict) else {}
         try:
             decoded = decode(spec)
@@ -243,7 +243,7 @@ def _solution_recording(
             stored = store.put(job.id, kind, path, attempt=attempt)
         with ctx.write() as session:
             oq.add_artifact(session, job.id, kind, *stored)
-            record = repo.get_artifact(session, job.id, kind)
+            record = oq.get_artifact(session, job.id, kind)
         assert record is not None
         return record
 
@@ -286,7 +286,7 @@ def front_metrics(ctx: ApiContext, job: JobRecord) -> dict[int, dict[str, Any] |
     ``front-metrics`` (JSON). 409 when the job's spec cannot be prepared again, 503 while
     they are being computed (longer than ``WAIT_S``)."""
     with ctx.read() as session:
-        existing = repo.get_artifact(session, job.id, FRONT_METRICS)
+        existing = oq.get_artifact(session, job.id, FRONT_METRICS)
     stored = _read_front_metrics(ctx, existing)
     if stored is not None:
         return stored
@@ -295,13 +295,13 @@ def front_metrics(ctx: ApiContext, job: JobRecord) -> dict[int, dict[str, Any] |
         from services.recording.point import PointError, decode_point, prepare_cached
 
         with ctx.read() as session:
-            done = repo.get_artifact(session, job.id, FRONT_METRICS)
+            done = oq.get_artifact(session, job.id, FRONT_METRICS)
         again = _read_front_metrics(ctx, done)
         if again is not None:
             return again
         with ctx.read() as session:
             spec = repo.job_spec(session, job)
-            points = repo.list_pareto(session, job.id)
+            points = oq.list_pareto(session, job.id)
         if not points:
             return {}
         try:
@@ -374,7 +374,7 @@ def point_motion(
             return cached
     with ctx.read() as session:
         spec = repo.job_spec(session, job)
-        result = repo.get_result(session, job.id)
+        result = oq.get_result(session, job.id)
         stored = oq.get_pareto_point(session, job.id, point) if point is not None else None
     if result is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"job {job.id} has no result yet")

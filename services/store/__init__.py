@@ -40,6 +40,14 @@ from services.store.lifecycle import (
     request_cancels,
     requeue_expired,
 )
+from services.store.output_queries import (
+    get_artifact,
+    get_result,
+    list_artifacts,
+    list_baselines,
+    list_generations,
+    list_pareto,
+)
 from services.store.progress import latest_checkpoint, record_generation, save_checkpoint
 from services.store.records import (
     ApiKeyRecord,
@@ -69,18 +77,12 @@ from services.store.repository import (
     delete_robot,
     get_api_key,
     get_api_key_by_hash,
-    get_artifact,
     get_job,
-    get_result,
     get_robot,
     get_robot_by_name,
     get_sweep,
     list_api_keys,
-    list_artifacts,
-    list_baselines,
-    list_generations,
     list_jobs,
-    list_pareto,
     list_robots,
     list_sweeps,
 )

@@ -1,7 +1,9 @@
-"""Reads and writes of a job's outputs that the dashboard and the worker add to the store: the
-final hypervolume of jobs, points of a front, fronts of several jobs, artifacts made after a
-job finished (a front point's recording), the reference point of a job's hypervolumes, and
-the per-objective minimum of a job's stored fronts (its convergence view).
+"""Reads and writes of a job's outputs: its generations, result, front, baselines and
+artifacts as the worker stored them (``list_generations``, ``get_result``, …), and what the
+dashboard and the worker add to the store: the final hypervolume of jobs, points of a front,
+fronts of several jobs, artifacts made after a job finished (a front point's recording), the
+reference point of a job's hypervolumes, and the per-objective minimum of a job's stored fronts
+(its convergence view).
 
 Like ``services.store.repository``: every function takes the ``Session`` first and never
 commits.
@@ -9,6 +11,7 @@ commits.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -16,10 +19,104 @@ import numpy as np
 from sqlalchemy import and_, delete, func, or_, select, update
 from sqlalchemy.orm import Session
 
-from services.store.front_codec import decode_front_array
-from services.store.records import ParetoPointRecord
-from services.store.sql import fetch_all, fetch_one, insert_ignoring_duplicates, now_utc
-from services.store.tables import ARTIFACTS, GENERATIONS, JOBS, PARETO_POINTS, JobStatus
+from services.store.front_codec import decode_front, decode_front_array
+from services.store.records import (
+    ArtifactRecord,
+    BaselineRecord,
+    GenerationRecord,
+    ParetoPointRecord,
+    ResultRecord,
+)
+from services.store.sql import (
+    MAX_PAGE_SIZE,
+    check_page,
+    fetch_all,
+    fetch_one,
+    insert_ignoring_duplicates,
+    now_utc,
+    to_record,
+)
+from services.store.tables import (
+    ARTIFACTS,
+    BASELINES,
+    GENERATIONS,
+    JOBS,
+    PARETO_POINTS,
+    RESULTS,
+    JobStatus,
+)
+
+
+def list_generations(
+    session: Session, job_id: str, *, after: int | None = None, limit: int = MAX_PAGE_SIZE
+) -> tuple[GenerationRecord, ...]:
+    """Generation rows of a job in order; ``after`` returns only later generations (polling)."""
+    check_page(limit, 0)
+    stmt = select(GENERATIONS).where(GENERATIONS.c.job_id == job_id)
+    if after is not None:
+        stmt = stmt.where(GENERATIONS.c.generation > after)
+    stmt = stmt.order_by(GENERATIONS.c.generation).limit(limit)
+    records = []
+    for row in session.execute(stmt).mappings():
+        packed = row["front_packed"]
+        values = dict(row) if packed is None else {**row, "front": decode_front(packed)}
+        records.append(to_record(GenerationRecord, values))
+    return tuple(records)
+
+
+def get_result(session: Session, job_id: str) -> ResultRecord | None:
+    """The final result of a job, or None until it has succeeded."""
+    return fetch_one(session, ResultRecord, select(RESULTS).where(RESULTS.c.job_id == job_id))
+
+
+def result_briefs(session: Session, job_ids: Iterable[str]) -> dict[str, tuple[Any, Any]]:
+    """``{job_id: (objectives, metrics)}`` of the given jobs' results in one query (jobs without
+    a result are absent) — the sweep table's columns, without the summaries."""
+    ids = list(job_ids)
+    if not ids:
+        return {}
+    stmt = select(RESULTS.c.job_id, RESULTS.c.objectives, RESULTS.c.metrics).where(
+        RESULTS.c.job_id.in_(ids)
+    )
+    return {
+        r.job_id: (copy.deepcopy(r.objectives), copy.deepcopy(r.metrics))
+        for r in session.execute(stmt)
+    }
+
+
+def get_result_objectives(session: Session, job_id: str) -> Any:
+    """Only the ``objectives`` JSON of a job's result (None until it has succeeded) — without
+    the (possibly large) summary, for the front and sweep views."""
+    row = session.execute(select(RESULTS.c.objectives).where(RESULTS.c.job_id == job_id)).first()
+    return None if row is None else copy.deepcopy(row[0])
+
+
+def list_pareto(session: Session, job_id: str) -> tuple[ParetoPointRecord, ...]:
+    """The final Pareto front of a job, by index (empty until it has succeeded)."""
+    stmt = (
+        select(PARETO_POINTS)
+        .where(PARETO_POINTS.c.job_id == job_id)
+        .order_by(PARETO_POINTS.c.index)
+    )
+    return fetch_all(session, ParetoPointRecord, stmt)
+
+
+def list_baselines(session: Session, job_id: str) -> tuple[BaselineRecord, ...]:
+    """Baselines stored with a job's result, by name."""
+    stmt = select(BASELINES).where(BASELINES.c.job_id == job_id).order_by(BASELINES.c.name)
+    return fetch_all(session, BaselineRecord, stmt)
+
+
+def list_artifacts(session: Session, job_id: str) -> tuple[ArtifactRecord, ...]:
+    """Artifacts of a job, by kind."""
+    stmt = select(ARTIFACTS).where(ARTIFACTS.c.job_id == job_id).order_by(ARTIFACTS.c.kind)
+    return fetch_all(session, ArtifactRecord, stmt)
+
+
+def get_artifact(session: Session, job_id: str, kind: str) -> ArtifactRecord | None:
+    """The artifact of ``kind`` (e.g. ``"recording"``) of a job, or None."""
+    stmt = select(ARTIFACTS).where(ARTIFACTS.c.job_id == job_id, ARTIFACTS.c.kind == kind)
+    return fetch_one(session, ArtifactRecord, stmt)
 
 
 def final_hypervolumes(session: Session, job_ids: Sequence[str]) -> dict[str, float]:
@@ -178,7 +275,15 @@ __all__ = [
     "forget_artifact",
     "front_minimum",
     "fronts_of",
+    "get_artifact",
     "get_hypervolume_ref",
     "get_pareto_point",
+    "get_result",
+    "get_result_objectives",
+    "list_artifacts",
+    "list_baselines",
+    "list_generations",
+    "list_pareto",
+    "result_briefs",
     "set_hypervolume_ref",
 ]

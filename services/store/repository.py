@@ -21,17 +21,11 @@ from sqlalchemy import ColumnElement, Table, delete, func, insert, select, updat
 from sqlalchemy.orm import Session
 
 from services.store.events import add_events
-from services.store.front_codec import decode_front
 from services.store.id_prefix import owned_with_prefix
 from services.store.records import (
     ApiKeyRecord,
-    ArtifactRecord,
-    BaselineRecord,
-    GenerationRecord,
     JobRecord,
     Page,
-    ParetoPointRecord,
-    ResultRecord,
     RobotRecord,
     SweepRecord,
 )
@@ -39,24 +33,16 @@ from services.store.robot_documents import by_reference, expand
 from services.store.specs import apply_overrides, json_size, spec_value
 from services.store.sql import (
     COUNT_CAP,
-    MAX_PAGE_SIZE,
-    check_page,
     fetch_all,
     fetch_one,
     fetch_page,
     insert_or_conflict,
     now_utc,
     rowcount,
-    to_record,
 )
 from services.store.tables import (
     API_KEYS,
-    ARTIFACTS,
-    BASELINES,
-    GENERATIONS,
     JOBS,
-    PARETO_POINTS,
-    RESULTS,
     ROBOTS,
     SWEEPS,
     JobEventKind,
@@ -493,81 +479,6 @@ def count_jobs_by_status(
     return counts
 
 
-# --------------------------------------------------------------------------- job outputs
-
-
-def list_generations(
-    session: Session, job_id: str, *, after: int | None = None, limit: int = MAX_PAGE_SIZE
-) -> tuple[GenerationRecord, ...]:
-    """Generation rows of a job in order; ``after`` returns only later generations (polling)."""
-    check_page(limit, 0)
-    stmt = select(GENERATIONS).where(GENERATIONS.c.job_id == job_id)
-    if after is not None:
-        stmt = stmt.where(GENERATIONS.c.generation > after)
-    stmt = stmt.order_by(GENERATIONS.c.generation).limit(limit)
-    records = []
-    for row in session.execute(stmt).mappings():
-        packed = row["front_packed"]
-        values = dict(row) if packed is None else {**row, "front": decode_front(packed)}
-        records.append(to_record(GenerationRecord, values))
-    return tuple(records)
-
-
-def get_result(session: Session, job_id: str) -> ResultRecord | None:
-    """The final result of a job, or None until it has succeeded."""
-    return fetch_one(session, ResultRecord, select(RESULTS).where(RESULTS.c.job_id == job_id))
-
-
-def result_briefs(session: Session, job_ids: Iterable[str]) -> dict[str, tuple[Any, Any]]:
-    """``{job_id: (objectives, metrics)}`` of the given jobs' results in one query (jobs without
-    a result are absent) — the sweep table's columns, without the summaries."""
-    ids = list(job_ids)
-    if not ids:
-        return {}
-    stmt = select(RESULTS.c.job_id, RESULTS.c.objectives, RESULTS.c.metrics).where(
-        RESULTS.c.job_id.in_(ids)
-    )
-    return {
-        r.job_id: (copy.deepcopy(r.objectives), copy.deepcopy(r.metrics))
-        for r in session.execute(stmt)
-    }
-
-
-def get_result_objectives(session: Session, job_id: str) -> Any:
-    """Only the ``objectives`` JSON of a job's result (None until it has succeeded) — without
-    the (possibly large) summary, for the front and sweep views."""
-    row = session.execute(select(RESULTS.c.objectives).where(RESULTS.c.job_id == job_id)).first()
-    return None if row is None else copy.deepcopy(row[0])
-
-
-def list_pareto(session: Session, job_id: str) -> tuple[ParetoPointRecord, ...]:
-    """The final Pareto front of a job, by index (empty until it has succeeded)."""
-    stmt = (
-        select(PARETO_POINTS)
-        .where(PARETO_POINTS.c.job_id == job_id)
-        .order_by(PARETO_POINTS.c.index)
-    )
-    return fetch_all(session, ParetoPointRecord, stmt)
-
-
-def list_baselines(session: Session, job_id: str) -> tuple[BaselineRecord, ...]:
-    """Baselines stored with a job's result, by name."""
-    stmt = select(BASELINES).where(BASELINES.c.job_id == job_id).order_by(BASELINES.c.name)
-    return fetch_all(session, BaselineRecord, stmt)
-
-
-def list_artifacts(session: Session, job_id: str) -> tuple[ArtifactRecord, ...]:
-    """Artifacts of a job, by kind."""
-    stmt = select(ARTIFACTS).where(ARTIFACTS.c.job_id == job_id).order_by(ARTIFACTS.c.kind)
-    return fetch_all(session, ArtifactRecord, stmt)
-
-
-def get_artifact(session: Session, job_id: str, kind: str) -> ArtifactRecord | None:
-    """The artifact of ``kind`` (e.g. ``"recording"``) of a job, or None."""
-    stmt = select(ARTIFACTS).where(ARTIFACTS.c.job_id == job_id, ARTIFACTS.c.kind == kind)
-    return fetch_one(session, ArtifactRecord, stmt)
-
-
 __all__ = [
     "count_jobs_by_status",
     "create_api_key",
@@ -580,20 +491,14 @@ __all__ = [
     "delete_robot",
     "get_api_key",
     "get_api_key_by_hash",
-    "get_artifact",
     "get_job",
-    "get_result",
     "get_robot",
     "get_robot_by_name",
     "get_sweep",
     "job_labels",
     "job_spec",
     "list_api_keys",
-    "list_artifacts",
-    "list_baselines",
-    "list_generations",
     "list_jobs",
-    "list_pareto",
     "list_robots",
     "list_sweeps",
     "revoke_api_key",

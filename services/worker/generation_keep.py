@@ -17,7 +17,7 @@ from services.store.evaluations import (
     evaluation_stride,
     keeps_generation,
 )
-from services.store.repository import list_generations
+from services.store.output_queries import list_generations
 from services.store.session import session_scope
 
 

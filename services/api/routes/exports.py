@@ -23,6 +23,7 @@ from services.api.points import point_metrics
 from services.api.schemas import ErrorOut, objective_names
 from services.api.sweep_cells import mean_sd
 from services.store import dashboard_queries as dq
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.verdict import violations_text
 
@@ -178,9 +179,9 @@ def export_front(
     its name in the last column, ``baseline``)."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-        points = repo.list_pareto(session, job.id)
-        names = objective_names(repo.get_result_objectives(session, job.id))
-        baselines = repo.list_baselines(session, job.id)
+        points = oq.list_pareto(session, job.id)
+        names = objective_names(oq.get_result_objectives(session, job.id))
+        baselines = oq.list_baselines(session, job.id)
     per_point, state, _note = point_metrics(ctx, job, bool(points))
     if state == "pending":
         raise HTTPException(
@@ -209,12 +210,12 @@ def export_history(
     (``compromise_<name>``: the knee of that front, not a best per objective)."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-        names = objective_names(repo.get_result_objectives(session, job.id))
+        names = objective_names(oq.get_result_objectives(session, job.id))
         generations: list[Any] = []
         conv: list[ConvergenceRow] = []
         after: int | None = None
         while True:
-            chunk = repo.list_generations(session, job.id, after=after, limit=1000)
+            chunk = oq.list_generations(session, job.id, after=after, limit=1000)
             conv.extend(convergence(session, job.id, chunk, after=after))
             generations.extend(chunk)
             if len(chunk) < 1000:

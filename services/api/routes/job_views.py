@@ -85,9 +85,9 @@ def get_front(job_id: str, key: CurrentKey, ctx: Context) -> FrontOut:
     artifact ``front-metrics``; a large front may answer ``point_metrics: pending`` first."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-        points = repo.list_pareto(session, job.id)
-        result = repo.get_result(session, job.id)
-        baselines = repo.list_baselines(session, job.id)
+        points = oq.list_pareto(session, job.id)
+        result = oq.get_result(session, job.id)
+        baselines = oq.list_baselines(session, job.id)
         ref = oq.get_hypervolume_ref(session, job.id)
         spec = repo.job_spec(session, job)
     per_point, state, note = point_metrics(ctx, job, bool(points))

@@ -46,6 +46,7 @@ from services.api.submission import (
 from services.api.validation import example_specs, stored_references
 from services.api.validation_pool import check_job
 from services.store import lifecycle
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
@@ -197,11 +198,11 @@ def get_result(job_id: str, key: CurrentKey, ctx: Context) -> ResultOut:
     derived them from the robot), baselines (each with its own verdict), artifacts."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-        result = repo.get_result(session, job.id)
+        result = oq.get_result(session, job.id)
         if result is None:
             raise _no_output(job, "result")
-        baselines = repo.list_baselines(session, job.id)
-        artifacts = repo.list_artifacts(session, job.id)
+        baselines = oq.list_baselines(session, job.id)
+        artifacts = oq.list_artifacts(session, job.id)
     out = ResultOut.from_records(result, baselines, artifacts, job)
     summary = out.summary
     if isinstance(summary, dict) and "extras" not in summary:
@@ -240,8 +241,8 @@ def get_pareto(job_id: str, key: CurrentKey, ctx: Context, page: Pagination) -> 
     """Points of the front by index: decision vector ``x`` and ``objectives``."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-        points = repo.list_pareto(session, job.id)
-        names = objective_names(repo.get_result_objectives(session, job.id))
+        points = oq.list_pareto(session, job.id)
+        names = objective_names(oq.get_result_objectives(session, job.id))
     chosen = points[page.offset : page.offset + page.limit]
     return ParetoPage(
         items=[ParetoPointOut.from_record(p) for p in chosen],
@@ -273,7 +274,7 @@ def get_generations(
     hypervolume and the wall time."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-        rows = repo.list_generations(session, job.id, after=after, limit=limit)
+        rows = oq.list_generations(session, job.id, after=after, limit=limit)
         conv = convergence(session, job.id, rows, after=after)
     return GenerationPage(
         items=[
@@ -302,7 +303,7 @@ def get_recording(job_id: str, key: CurrentKey, ctx: Context) -> Response:
     be reached."""
     with ctx.read() as session:
         job = owned_job(session, job_id, key.id)
-        artifact = repo.get_artifact(session, job.id, RECORDING)
+        artifact = oq.get_artifact(session, job.id, RECORDING)
         labels = repo.job_labels(session, [job])[job.id]
     if artifact is None:
         if labels.get("record") is False:

@@ -33,6 +33,7 @@ from services.api.submission import (
 from services.api.sweeps import SweepError, SweepPoint, expand, swept_paths
 from services.api.validation import CheckedJob, resolve_robot, stored_references
 from services.api.validation_pool import check_sweep
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
@@ -210,7 +211,7 @@ def get_sweep(sweep_id: str, key: CurrentKey, ctx: Context, page: Pagination) ->
         counts = repo.count_jobs_by_status(session, owner_key_id=key.id, sweep_id=sweep.id)
         total = sum(counts.values())
         jobs = _jobs_in_order(session, key.id, sweep.id, total, page.limit, page.offset)
-        results = repo.result_briefs(
+        results = oq.result_briefs(
             session, [j.id for j in jobs if j.status is JobStatus.SUCCEEDED]
         )
         base = repo.sweep_base_spec(session, sweep)
@@ -293,7 +294,7 @@ def get_sweep_recording(
             raise invalid(("query", "jobs"), f"not jobs of sweep {sweep.id}: {', '.join(unknown)}")
         artifacts = []
         for job_id in chosen:
-            art = repo.get_artifact(session, job_id, "recording")
+            art = oq.get_artifact(session, job_id, "recording")
             if art is not None:
                 artifacts.append((job_id, art))
             elif jobs:

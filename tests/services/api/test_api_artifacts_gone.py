@@ -23,7 +23,7 @@ from fastapi.testclient import TestClient
 
 from services.api.app import create_app
 from services.client import Client
-from services.store import repository as repo
+from services.store import output_queries as oq
 from services.store.settings import Settings
 from services.worker.execute import execute_job
 from tests.s3_server import aws_env, free_port, moto_server, s3_client
@@ -208,7 +208,7 @@ def test_s3_recording_downloads_honour_ranges(s3env: dict[str, Any]) -> None:
         sha = full.headers["x-checksum-sha256"]
         assert hashlib.sha256(full.content).hexdigest() == sha and full.content[:4] == b"RRF2"
         with client.app.state.context.read() as s:  # type: ignore[attr-defined]
-            art = repo.get_artifact(s, job, "recording")
+            art = oq.get_artifact(s, job, "recording")
         assert art is not None and art.sha256 == sha and art.size_bytes == len(full.content)
         assert full.headers["accept-ranges"] == "bytes"
         assert full.headers["content-disposition"] == f'attachment; filename="{job}.rrd"'

@@ -19,6 +19,7 @@ import pytest
 import yaml
 from api_helpers import API, dashboard_env
 
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.worker.execute import execute_job
 
@@ -43,7 +44,7 @@ def test_front_has_named_objectives_baselines_and_hypervolume(env: dict[str, Any
     assert front["points"] and front["best_index"] is not None
     # the reported optimum's place as the worker stored it: that point is the optimum itself
     with env["ctx"].read() as s:
-        result = repo.get_result(s, env["job"])
+        result = oq.get_result(s, env["job"])
     assert result is not None and front["best_index"] == result.summary["best_index"]
     best = next(p for p in front["points"] if p["index"] == front["best_index"])
     assert best["x"] == pytest.approx(result.best_x)
@@ -67,7 +68,7 @@ def test_front_has_named_objectives_baselines_and_hypervolume(env: dict[str, Any
     from legcore.metrics import hypervolume
 
     with env["ctx"].read() as s:
-        last = repo.list_generations(s, env["job"])[-1]
+        last = oq.list_generations(s, env["job"])[-1]
     assert last.front is not None
     assert hv[-1] >= hypervolume(np.asarray(last.front), ref).value - 1e-12
 
@@ -99,8 +100,8 @@ def test_point_motion_and_recording_are_made_once(env: dict[str, Any]) -> None:
     assert first.status_code == 200, first.text
     assert first.content[:4] == b"RRF2" and first.headers["x-checksum-sha256"]
     with ctx.read() as s:
-        art = repo.get_artifact(s, env["job"], f"point-{point['index']}")
-        result = repo.get_artifact(s, env["job"], "result")
+        art = oq.get_artifact(s, env["job"], f"point-{point['index']}")
+        result = oq.get_artifact(s, env["job"], "result")
     assert art is not None and result is not None
     assert art.relative_path.rsplit("/", 1)[0] == result.relative_path.rsplit("/", 1)[0]
     again = client.get(url, headers=alice)
@@ -151,7 +152,7 @@ def test_front_points_carry_their_metrics_decoded_once(env: dict[str, Any]) -> N
     assert decoded and {k: point["metrics"][k] for k in decoded} == pytest.approx(decoded)
     assert point["metrics"]["time"] == pytest.approx(point["objectives"][0], rel=1e-12)
     with ctx.read() as s:
-        art = repo.get_artifact(s, env["job"], "front-metrics")
+        art = oq.get_artifact(s, env["job"], "front-metrics")
     assert art is not None and art.relative_path.endswith(".json")
 
     # served from the artifact afterwards: no decoding
@@ -205,7 +206,7 @@ def test_a_baseline_has_its_own_recording(env: dict[str, Any]) -> None:
     job_rrd = client.get(f"{API}/jobs/{env['job']}/recording", headers=alice).content
     assert job_rrd[:4] == b"RRF2" and r.content != job_rrd
     with ctx.read() as s:
-        kinds = {a.kind for a in repo.list_artifacts(s, env["job"])}
+        kinds = {a.kind for a in oq.list_artifacts(s, env["job"])}
     assert "baseline-1" in kinds  # seed_max_V: the second baseline by name
     assert client.get(url, headers=alice).content == r.content
     missing = client.get(f"{API}/jobs/{env['job']}/baselines/nope/recording", headers=alice)

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.artifacts import ArtifactStore
 from services.store.keys import generate_api_key
@@ -31,7 +32,7 @@ def test_a_tiny_jobs_artifacts_are_within_the_documented_budget(settings: Settin
         job_id = repo.create_job(s, owner_key_id=key.id, spec=TINY, total_generations=3).id
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
     with session_scope() as s:
-        arts = {a.kind: a for a in repo.list_artifacts(s, job_id)}
+        arts = {a.kind: a for a in oq.list_artifacts(s, job_id)}
     assert set(arts) == {"result", "recording"}
     assert 0 < arts["recording"].size_bytes <= TINY_RECORDING_BYTES
     assert 0 < arts["result"].size_bytes <= TINY_RESULT_BYTES

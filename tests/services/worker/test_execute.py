@@ -12,6 +12,7 @@ import pytest
 
 from legcore.optimizers import to_jsonable
 from legcore.runner import prepare
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.lifecycle import claim_job, requeue_expired
@@ -66,8 +67,8 @@ def test_a_failing_recording_is_a_warning_not_a_failure(
     assert job.status == "succeeded"
     assert any("recording failed: OSError: disk full" in w for w in job.warnings)
     with session_scope() as s:
-        assert repo.get_artifact(s, job_id, "recording") is None
-        assert repo.get_artifact(s, job_id, "result") is not None
+        assert oq.get_artifact(s, job_id, "recording") is None
+        assert oq.get_artifact(s, job_id, "result") is not None
 
 
 def test_resume_from_checkpoint_ends_where_the_uninterrupted_run_ends(settings: Settings) -> None:
@@ -92,7 +93,7 @@ def test_resume_from_checkpoint_ends_where_the_uninterrupted_run_ends(settings: 
     outcome = execute.execute_job(job_id, settings, wid="w2")
     assert outcome.status == "succeeded" and outcome.resumed_from == 3
     with session_scope() as s:
-        a, b = repo.get_result(s, reference), repo.get_result(s, job_id)
+        a, b = oq.get_result(s, reference), oq.get_result(s, job_id)
         job = repo.get_job(s, job_id)
     assert b.best_x == a.best_x and b.objectives == a.objectives and b.metrics == a.metrics
     assert job.attempt_count == 2
@@ -115,7 +116,7 @@ def test_progress_rows_are_all_written_when_batched(settings: Settings) -> None:
     sparse = settings.with_overrides(checkpoint_every=1000)
     assert execute.execute_job(job_id, sparse, wid="w1").status == "succeeded"
     with session_scope() as s:
-        rows = repo.list_generations(s, job_id)
+        rows = oq.list_generations(s, job_id)
         ckpt = latest_checkpoint(s, job_id)
     assert [r.generation for r in rows] == list(range(1, 9))
     assert ckpt is not None and ckpt.generation == 8  # the final state is always checkpointed
@@ -146,7 +147,7 @@ def test_a_stale_worker_never_overwrites_the_winners_artifacts(
         requeue_expired(s, now_utc() + timedelta(seconds=settings.lease_seconds + 1))
     assert execute.execute_job(job_id, settings, wid="winner").status == "succeeded"
     with session_scope() as s:
-        art = repo.get_artifact(s, job_id, "recording")
+        art = oq.get_artifact(s, job_id, "recording")
     assert art is not None
     store = ArtifactStore.from_settings(settings)
     winner_bytes = store.read(art.relative_path, art.sha256)

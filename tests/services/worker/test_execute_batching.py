@@ -11,13 +11,14 @@ import numpy as np
 import pytest
 
 from services.store import lifecycle
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.lifecycle import request_cancel
 from services.store.progress import latest_checkpoint
 from services.store.session import session_scope
 from services.store.settings import Settings
-from services.worker import execute
+from services.worker import execute, generation_keep
 
 SPEC: dict[str, Any] = {
     "problem": {"kind": "hexapod_workspace"},
@@ -59,7 +60,7 @@ def test_a_cancel_seen_by_the_progress_write_stops_the_job(
     with session_scope() as s:
         job = repo.get_job(s, job_id)
         assert job is not None and job.status == "cancelled" and job.progress_generation == 1
-        assert [g.generation for g in repo.list_generations(s, job_id)] == [1]
+        assert [g.generation for g in oq.list_generations(s, job_id)] == [1]
 
 
 def test_the_recording_gets_its_fronts_from_memory(
@@ -80,14 +81,14 @@ def test_the_recording_gets_its_fronts_from_memory(
         raise AssertionError("the worker holds the fronts: no read-back")
 
     monkeypatch.setattr(writer, "write_recording", fake_write)
-    monkeypatch.setattr(repo, "list_generations", no_read_back)
+    monkeypatch.setattr(generation_keep, "list_generations", no_read_back)
     job_id = _job({**SPEC, "record": True})
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
     fronts = seen["fronts"]
     assert sorted(fronts) == list(range(1, 7))
     monkeypatch.undo()
     with session_scope() as s:
-        stored = {g.generation: g.front for g in repo.list_generations(s, job_id)}
+        stored = {g.generation: g.front for g in oq.list_generations(s, job_id)}
     for g, F in fronts.items():  # exactly what the store keeps (NaN for None)
         np.testing.assert_array_equal(F, np.asarray(stored[g], dtype=float))
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.artifacts import ArtifactStore
 from services.store.keys import generate_api_key
@@ -27,8 +28,8 @@ def _run(spec: dict[str, Any], settings: Settings) -> tuple[Any, dict[str, Any],
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
     with session_scope() as s:
         job = repo.get_job(s, job_id)
-        art = repo.get_artifact(s, job_id, "result")
-        result = repo.get_result(s, job_id)
+        art = oq.get_artifact(s, job_id, "result")
+        result = oq.get_result(s, job_id)
     assert job is not None and art is not None and result is not None
     doc = json.loads(ArtifactStore.from_settings(settings).read(art.relative_path, art.sha256))
     return job, doc, result
