@@ -17,7 +17,7 @@ from services.api.verdict_schemas import (
 )
 from services.store.dashboard_queries import JobRow
 from services.store.records import BaselineRecord
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 
 class Quantity(BaseModel):

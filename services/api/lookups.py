@@ -23,7 +23,7 @@ from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.records import JobRecord, SweepRecord
 from services.store.specs import shown_value, spec_value
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 
 def owned_job(session: Session, job_id: str, owner_key_id: str) -> JobRecord:

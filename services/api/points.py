@@ -42,7 +42,7 @@ from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.errors import ArtifactError, ArtifactMissingError, ChecksumMismatchError
 from services.store.records import ArtifactRecord, JobRecord
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 T = TypeVar("T")
 

@@ -96,7 +96,8 @@ from services.store.session import (
     session_scope,
 )
 from services.store.settings import Settings, get_settings
-from services.store.tables import Base, JobStatus, RobotSource
+from services.store.states import JobStatus, RobotSource
+from services.store.tables import Base
 
 __all__ = [
     "ApiKeyRecord",

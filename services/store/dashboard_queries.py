@@ -38,7 +38,8 @@ from services.store.job_search_paging import (
 from services.store.records import JobRecord
 from services.store.search_index import MIN_INDEXED_WORD
 from services.store.sql import COUNT_CAP
-from services.store.tables import JOB_LABELS, JOBS, SWEEPS, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import JOB_LABELS, JOBS, SWEEPS
 
 #: Jobs created this long before the newest labelled one are checked again for a label (a
 #: transaction that committed late); PostgreSQL commits a job within ms of its created_at.

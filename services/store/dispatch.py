@@ -28,7 +28,8 @@ from sqlalchemy.orm import Session
 
 from services.store.events import add_events
 from services.store.sql import insert_ignoring_duplicates, now_utc, rowcount
-from services.store.tables import JOB_EVENTS, JOBS, SERVICE_LEASES, JobEventKind, JobStatus
+from services.store.states import JobEventKind, JobStatus
+from services.store.tables import JOB_EVENTS, JOBS, SERVICE_LEASES
 from services.store.types import UTCDateTime
 
 #: Seconds from a send to the next re-send of a still-queued job, by messages sent so far;

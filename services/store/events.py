@@ -18,7 +18,8 @@ from sqlalchemy.orm import Session
 
 from services.store.records import JobEventRecord
 from services.store.sql import fetch_all, now_utc
-from services.store.tables import JOB_EVENTS, JOBS, JobEventKind
+from services.store.states import JobEventKind
+from services.store.tables import JOB_EVENTS, JOBS
 
 
 def add_events(

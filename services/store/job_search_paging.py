@@ -31,7 +31,8 @@ from sqlalchemy.sql.compiler import SQLCompiler
 from sqlalchemy.sql.selectable import Join
 
 from services.store.search_index import MIN_INDEXED_WORD, SEARCH_FTS
-from services.store.tables import JOB_LABELS, JOBS, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import JOB_LABELS, JOBS
 
 
 def _like(text: str) -> str:

@@ -15,7 +15,8 @@ from sqlalchemy.orm import Session
 
 from services.store.errors import LeaseLostError
 from services.store.sql import rowcount
-from services.store.tables import JOBS, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import JOBS
 
 _RUNNING = JobStatus.RUNNING
 

@@ -42,15 +42,8 @@ from services.store.records import (
 )
 from services.store.repository import get_job
 from services.store.sql import now_utc, rowcount
-from services.store.tables import (
-    ARTIFACTS,
-    BASELINES,
-    JOBS,
-    PARETO_POINTS,
-    RESULTS,
-    JobEventKind,
-    JobStatus,
-)
+from services.store.states import JobEventKind, JobStatus
+from services.store.tables import ARTIFACTS, BASELINES, JOBS, PARETO_POINTS, RESULTS
 from services.store.types import UTCDateTime
 
 # --------------------------------------------------------------------------- claims and leases

@@ -36,15 +36,8 @@ from services.store.sql import (
     now_utc,
     to_record,
 )
-from services.store.tables import (
-    ARTIFACTS,
-    BASELINES,
-    GENERATIONS,
-    JOBS,
-    PARETO_POINTS,
-    RESULTS,
-    JobStatus,
-)
+from services.store.states import JobStatus
+from services.store.tables import ARTIFACTS, BASELINES, GENERATIONS, JOBS, PARETO_POINTS, RESULTS
 
 
 def list_generations(

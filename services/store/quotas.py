@@ -29,7 +29,8 @@ from sqlalchemy.orm import Session
 from services.store.records import ApiKeyRecord
 from services.store.settings import Settings
 from services.store.sql import insert_ignoring_duplicates, now_utc, rowcount
-from services.store.tables import API_KEYS, ARTIFACTS, JOBS, KEY_USAGE, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import API_KEYS, ARTIFACTS, JOBS, KEY_USAGE
 
 #: ``Retry-After`` of an active-jobs refusal (s): a slot frees when one of the key's jobs ends,
 #: which the API cannot foresee; jobs run for tens of seconds to minutes, so half a minute

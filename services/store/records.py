@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Generic, TypeVar
 
-from services.store.tables import JobEventKind, JobStatus, KeyRole, RobotSource
+from services.store.states import JobEventKind, JobStatus, KeyRole, RobotSource
 
 T = TypeVar("T")
 

@@ -40,17 +40,8 @@ from services.store.sql import (
     now_utc,
     rowcount,
 )
-from services.store.tables import (
-    API_KEYS,
-    JOBS,
-    ROBOTS,
-    SWEEPS,
-    JobEventKind,
-    JobStatus,
-    KeyRole,
-    RobotSource,
-    new_id,
-)
+from services.store.states import JobEventKind, JobStatus, KeyRole, RobotSource
+from services.store.tables import API_KEYS, JOBS, ROBOTS, SWEEPS, new_id
 from services.store.types import as_utc
 
 

@@ -37,6 +37,7 @@ from sqlalchemy.engine import Connection
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 from services.store.search_index import SEARCH_FTS, create_search_index
+from services.store.states import JobEventKind, JobStatus, KeyRole, RobotSource
 from services.store.types import JSONValue, UTCDateTime, utcnow
 
 NAMING_CONVENTION = {
@@ -53,48 +54,6 @@ ID_LENGTH = 36
 def new_id() -> str:
     """A new resource id (random UUID as a 36-character string)."""
     return str(uuid.uuid4())
-
-
-class JobStatus(enum.StrEnum):
-    """Lifecycle of a job: queued -> running -> succeeded | failed | cancelled."""
-
-    QUEUED = "queued"
-    RUNNING = "running"
-    SUCCEEDED = "succeeded"
-    FAILED = "failed"
-    CANCELLED = "cancelled"
-
-    @property
-    def is_terminal(self) -> bool:
-        """True for succeeded, failed and cancelled."""
-        return self in (JobStatus.SUCCEEDED, JobStatus.FAILED, JobStatus.CANCELLED)
-
-
-class KeyRole(enum.StrEnum):
-    """What an API key may do: ``user`` (its own resources) or ``admin`` (also manage keys)."""
-
-    USER = "user"
-    ADMIN = "admin"
-
-
-class JobEventKind(enum.StrEnum):
-    """One state change of a job, as recorded in ``job_events`` (see ``JobEvent``)."""
-
-    SUBMITTED = "submitted"
-    DISPATCHED = "dispatched"
-    CLAIMED = "claimed"
-    REQUEUED = "requeued"
-    SUCCEEDED = "succeeded"
-    FAILED = "failed"
-    CANCELLED = "cancelled"
-
-
-class RobotSource(enum.StrEnum):
-    """How a stored robot model was given."""
-
-    CATALOG = "catalog"
-    DH = "dh"
-    URDF = "urdf"
 
 
 def _enum_type(cls: type[enum.Enum], name: str) -> Enum:

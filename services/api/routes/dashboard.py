@@ -27,7 +27,7 @@ from services.api.spec_cache import build_robot_cached
 from services.api.study_fits import robot_fits
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 router = APIRouter(tags=["dashboard"])
 

@@ -26,7 +26,7 @@ from services.api.schemas import ErrorOut
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.records import JobRecord
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 router = APIRouter(tags=["dashboard"])
 

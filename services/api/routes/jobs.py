@@ -52,7 +52,7 @@ from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
 from services.store.records import ArtifactRecord, JobRecord
 from services.store.specs import json_size
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 router = APIRouter(tags=["jobs"])
 log = logging.getLogger("legopt.api")

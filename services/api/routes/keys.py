@@ -16,7 +16,7 @@ from services.store.keys import generate_api_key
 from services.store.quotas import usage
 from services.store.records import ApiKeyRecord
 from services.store.sql import now_utc
-from services.store.tables import KeyRole
+from services.store.states import KeyRole
 
 router = APIRouter(tags=["keys"])
 

@@ -187,7 +187,8 @@ def _sweep_state(ctx: ApiContext, sweep_id: str, owner_key_id: str) -> dict[str,
     from sqlalchemy import Float, case, cast, func, select
 
     from services.api.schemas import sweep_state
-    from services.store.tables import JOBS, JobStatus
+    from services.store.states import JobStatus
+    from services.store.tables import JOBS
 
     fraction = case(
         (JOBS.c.total_generations > 0,

@@ -27,7 +27,7 @@ from services.api.schemas import ErrorOut, SweepSummary
 from services.store import lifecycle
 from services.store import repository as repo
 from services.store.records import JobRecord
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 __all__ = ["SweepCancelled", "router", "unfinished_job_ids"]
 

@@ -39,7 +39,7 @@ from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
 from services.store.records import JobRecord
 from services.store.specs import json_size, shown_value
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 router = APIRouter(tags=["sweeps"])
 

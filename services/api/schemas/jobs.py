@@ -17,7 +17,7 @@ from services.api.verdict_schemas import (
 )
 from services.store.records import GenerationRecord, JobRecord, ParetoPointRecord
 from services.store.sql import COUNT_CAP
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 
 class JobFacts(BaseModel):

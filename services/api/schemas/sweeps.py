@@ -19,7 +19,7 @@ from services.api.schemas.common import (
 )
 from services.api.verdict_schemas import FEASIBLE_DESCRIPTION
 from services.store.records import SweepRecord
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 _SWEEP_EXAMPLE: dict[str, JsonValue] = {
     "base": {"problem": {"kind": "swing_energy"}, "optimizer": {"kind": "ga"}},

@@ -22,7 +22,7 @@ from services.api.deps import ApiContext
 from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.settings import Settings
-from services.store.tables import KeyRole
+from services.store.states import KeyRole
 
 API = "/api/v1"
 KIND = sorted(studies())[0]

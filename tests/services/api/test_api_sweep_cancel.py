@@ -14,7 +14,7 @@ from services.cli import app as cli_app
 from services.store import repository as repo
 from services.store.events import list_events
 from services.store.lifecycle import claim_job
-from services.store.tables import JobEventKind, JobStatus
+from services.store.states import JobEventKind, JobStatus
 
 API = "/api/v1"
 KIND = sorted(studies())[0]

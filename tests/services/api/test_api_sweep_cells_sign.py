@@ -16,7 +16,7 @@ import pytest
 from api_helpers import fresh_app
 
 from services.api.sweep_cells import build_cells, job_values
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 API = "/api/v1"
 SCORE: dict[str, Any] = {

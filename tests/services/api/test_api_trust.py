@@ -19,7 +19,8 @@ from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.lifecycle import claim_job, fail_job
 from services.store.settings import Settings
-from services.store.tables import JOBS, SWEEPS, KeyRole
+from services.store.states import KeyRole
+from services.store.tables import JOBS, SWEEPS
 from tests.services.api.test_api_jobs import serial_study
 
 API = "/api/v1"

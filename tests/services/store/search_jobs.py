@@ -13,7 +13,8 @@ from sqlalchemy.orm import Session
 from services.api.lookups import study_defaults
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
-from services.store.tables import JOBS, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import JOBS
 
 NAMES = [
     "Calderon leg 100%_done", 'quote "this"', "back\\slash", "Ünïcode Straße", "wide sweep",

@@ -18,7 +18,7 @@ from services.store.dispatcher import PassReport, dispatch_pass, send_now
 from services.store.events import count_events, list_events
 from services.store.session import make_session_factory
 from services.store.settings import Settings
-from services.store.tables import JobEventKind
+from services.store.states import JobEventKind
 
 T0 = datetime(2026, 11, 23, 12, 0, 0, tzinfo=UTC)
 LEASE = 4.0

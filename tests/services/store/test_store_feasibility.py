@@ -21,7 +21,8 @@ from services.store import repository as repo
 from services.store.lifecycle import claim_job, finish_job
 from services.store.records import JobRecord, ParetoPointIn, ResultIn
 from services.store.session import make_engine, session_scope
-from services.store.tables import Base, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import Base
 
 T0 = datetime(2026, 3, 1, 8, 0, tzinfo=UTC)
 #: What legcore.runner writes for an optimum that misses a 20 mm stability margin by 16 mm.

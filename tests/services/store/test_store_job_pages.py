@@ -20,7 +20,8 @@ from services.store import dashboard_queries as dq
 from services.store import repository as repo
 from services.store.progress import first_objective
 from services.store.session import make_engine
-from services.store.tables import JOBS, Base, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import JOBS, Base
 
 KINDS = ["path_tracking", "swing_energy", "quadruped_gait"]
 STATUSES = [JobStatus.SUCCEEDED, JobStatus.FAILED, JobStatus.QUEUED, JobStatus.RUNNING]

@@ -18,7 +18,7 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
-from services.store.tables import JobStatus
+from services.store.states import JobStatus
 
 #: What a user types: words of every length, LIKE's wildcards, quotes, case, several words.
 QUERIES = [

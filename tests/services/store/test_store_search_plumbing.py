@@ -26,7 +26,8 @@ from services.store import migrate, search_index
 from services.store import repository as repo
 from services.store.search_index import SEARCH_FTS, SEARCH_TRGM_INDEX
 from services.store.session import make_engine
-from services.store.tables import JOB_LABELS, Base, JobStatus
+from services.store.states import JobStatus
+from services.store.tables import JOB_LABELS, Base
 
 
 def _fts_rows(s: Session, phrase: str) -> set[int]:
