@@ -47,7 +47,8 @@ from services.api.lookups import study_defaults  # noqa: E402
 from services.store import dashboard_queries as dq  # noqa: E402
 from services.store import repository as repo  # noqa: E402
 from services.store.keys import generate_api_key  # noqa: E402
-from services.store.tables import JOBS, JobStatus  # noqa: E402
+from services.store.states import JobStatus  # noqa: E402
+from services.store.tables import JOBS  # noqa: E402
 
 KINDS = ["path_tracking", "swing_energy", "hexapod_workspace", "quadruped_gait", "path_placement"]
 OPTIMIZERS = ["nsga2", "ga", "moead", "hka"]
