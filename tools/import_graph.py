@@ -56,7 +56,6 @@ KNOWN_CIRCLES: frozenset[tuple[str, ...]] = frozenset({
     ("legcore.studies.path_tracking.baselines", "legcore.studies.path_tracking.decode",
      "legcore.studies.path_tracking.limits", "legcore.studies.path_tracking.optimal",
      "legcore.studies.path_tracking.problem"),
-    ("legcore.studies.swing_energy.baselines", "legcore.studies.swing_energy.problem"),
 })
 
 

@@ -28,7 +28,6 @@ from legcore.memory import (
 from legcore.problems.base import Problem
 from legcore.problems.benchmarks import ZDT1
 from legcore.runner import prepare
-from legcore.studies.swing_energy.baselines import ga_baseline_problems
 
 SWING: dict[str, Any] = {"problem": {"kind": "swing_energy"}}
 OBSTACLE: dict[str, Any] = {"problem": {"kind": "swing_energy", "obstacle": True}}
@@ -91,8 +90,9 @@ def test_chunk_rows_and_budget() -> None:
 
 def test_predicted_peak_formula_is_pinned() -> None:
     problem = prepare(SWING).problem  # 30 genes, 301 samples, baseline GAs of 100
-    subs = ga_baseline_problems(problem)
-    assert sorted(p.criterion for p in subs) == ["energy", "multi_criteria", "theta_total"]
+    subs = [sub for sub, _ in problem.companions()]
+    assert sorted(p.name for p in subs) == [
+        "swing_energy[energy]", "swing_energy[multi_criteria]", "swing_energy[theta_total]"]
     per_row = max(bytes_per_sample(p) for p in [problem, *subs]) * 301
     assert predicted_peak_bytes(problem, 100) == PROCESS_BASE_BYTES + int(100 * per_row) + (
         100 * 30 * STATE_BYTES_PER_GENE)

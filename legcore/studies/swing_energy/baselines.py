@@ -45,7 +45,7 @@ Gradient baseline (beyond the papers; issue 19):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,16 +53,16 @@ from numpy.typing import NDArray
 from legcore.ik import solve
 from legcore.kinematics import fk
 from legcore.optimizers import MaxGenerations, get_algorithm, minimize
+from legcore.problems.base import Problem
 from legcore.result_cache import cached, code_version, content_key
 from legcore.studies.study import Solution
-
-if TYPE_CHECKING:
-    from legcore.studies.swing_energy.problem import SwingEnergyProblem
+from legcore.studies.swing_energy.contract import SwingProblem
+from legcore.studies.swing_energy.params import BASELINES
 
 __all__ = [
     "MULTI_TERMS",
     "compute_baselines",
-    "ga_baseline_problems",
+    "ga_baseline_criteria",
     "min_distance_via",
     "multi_criteria",
     "parabolic_via",
@@ -99,7 +99,7 @@ def multi_criteria(
     return total / len(MULTI_TERMS)
 
 
-def _ik_via(problem: SwingEnergyProblem, p: FloatArray) -> FloatArray | None:
+def _ik_via(problem: SwingProblem, p: FloatArray) -> FloatArray | None:
     """Via points (n_via, n) rad on the grid for foot targets p (n_via, 3); None if any fails."""
     sol = solve(problem.robot, p, "position", q0=problem.q_start, rest=problem.q_start,
                 path=True)
@@ -108,7 +108,7 @@ def _ik_via(problem: SwingEnergyProblem, p: FloatArray) -> FloatArray | None:
     return np.rint(sol.q / problem.res) * problem.res
 
 
-def parabolic_via(problem: SwingEnergyProblem, height: float | None = None) -> FloatArray | None:
+def parabolic_via(problem: SwingProblem, height: float | None = None) -> FloatArray | None:
     """Via points (n_via, n) rad of the parabolic swing (module docstring), None if the IK fails."""
     h = float(problem.params.step_height or 0.0) if height is None else float(height)
     s = np.arange(1, problem.n_via + 1) / (problem.n_via + 1)
@@ -131,7 +131,7 @@ def _upper_hull(pts: list[tuple[float, float]]) -> list[tuple[float, float]]:
     return hull
 
 
-def _taut_path(problem: SwingEnergyProblem, grow: float, lift: float) -> FloatArray:
+def _taut_path(problem: SwingProblem, grow: float, lift: float) -> FloatArray:
     """Foot targets (n_via, 3) at equal path-length fractions of the shortest start→end path in
     the chord's vertical plane over the box grown by ``margin + grow``; interior raised ``lift``."""
     ps, pe = problem.foot_start, problem.foot_end
@@ -168,7 +168,7 @@ def _taut_path(problem: SwingEnergyProblem, grow: float, lift: float) -> FloatAr
     return p
 
 
-def min_distance_via(problem: SwingEnergyProblem) -> FloatArray | None:
+def min_distance_via(problem: SwingProblem) -> FloatArray | None:
     """Via points (n_via, n) rad of the shortest foot path that the decoded trajectory keeps
     feasible (module docstring); None if no such path is found."""
     grow = lift = 0.0
@@ -185,7 +185,7 @@ def min_distance_via(problem: SwingEnergyProblem) -> FloatArray | None:
     return None
 
 
-def reference_values(problem: SwingEnergyProblem, via: FloatArray | None) -> dict[str, float]:
+def reference_values(problem: SwingProblem, via: FloatArray | None) -> dict[str, float]:
     """Normalisers of :func:`multi_criteria`: the values of the trajectory through ``via`` (the
     parabolic swing), floored at small positive numbers; the coordinated motion if None."""
     x = problem.coordinated_x() if via is None else problem.encode(via)
@@ -202,12 +202,11 @@ def reference_values(problem: SwingEnergyProblem, via: FloatArray | None) -> dic
     return {k: max(v, _REF_FLOOR[k]) for k, v in vals.items()}
 
 
-def _ga_baseline(problem: SwingEnergyProblem, criterion: str, refs: dict[str, float],
+def _ga_baseline(problem: SwingProblem, criterion: str, refs: dict[str, float],
                  label: str) -> Solution:
-    from legcore.studies.swing_energy.problem import SwingEnergyProblem
-
     p = problem.params
-    sub = SwingEnergyProblem(problem.source, p, criterion=criterion, refs=refs)
+    sub = problem.variant(criterion, refs)
+    assert isinstance(sub, Problem)
 
     def optimise() -> dict[str, Any]:
         algo = get_algorithm("ga", pop_size=p.baseline_pop_size, mutation_rate=0.03, elitism=2)
@@ -222,7 +221,7 @@ def _ga_baseline(problem: SwingEnergyProblem, criterion: str, refs: dict[str, fl
     return sol
 
 
-def _ga_key(problem: SwingEnergyProblem, criterion: str, refs: dict[str, float]) -> str:
+def _ga_key(problem: SwingProblem, criterion: str, refs: dict[str, float]) -> str:
     """Content hash of a GA baseline: robot, tool frame, study parameters, criterion,
     normalisers, numpy version and legcore's code (``legcore.result_cache``: the optimum is
     reused across processes when ``LEGOPT_CACHE_DIR`` is set)."""
@@ -234,28 +233,22 @@ def _ga_key(problem: SwingEnergyProblem, criterion: str, refs: dict[str, float])
     ])
 
 
-def ga_baseline_problems(problem: SwingEnergyProblem) -> list[SwingEnergyProblem]:
-    """The problems of the GA baselines ``problem.params.baselines`` asks for, with placeholder
-    ``multi_criteria`` normalisers (same arrays as the real ones: for sizing their memory)."""
-    from legcore.studies.swing_energy.problem import BASELINES, SwingEnergyProblem
-
-    criteria = {BASELINES[name][0] for name in problem.params.baselines}
+def ga_baseline_criteria(params: Any) -> list[str]:
+    """The criteria of the GA baselines ``params.baselines`` asks for (the problems are
+    ``problem.variant(criterion, refs)``), sorted."""
+    criteria = {BASELINES[name][0] for name in params.baselines}
     if "energy_gradient" in criteria:  # refines the minimum-energy problem's GA optimum
         criteria |= {"energy"}
     criteria -= {"parabolic", "foot_distance", "energy_gradient"}
-    refs = dict.fromkeys(MULTI_TERMS, 1.0)
-    return [SwingEnergyProblem(problem.source, problem.params, criterion=c, refs=refs)
-            for c in sorted(criteria)]
+    return sorted(criteria)
 
 
-def compute_baselines(problem: SwingEnergyProblem) -> dict[str, Solution]:
+def compute_baselines(problem: SwingProblem) -> dict[str, Solution]:
     """All baselines listed in ``problem.params.baselines``, by name (module docstring).
 
     A construction whose IK fails for a user's start/end (or that cannot be made feasible) is
     left out; the GA baselines always exist.
     """
-    from legcore.studies.swing_energy.problem import BASELINES
-
     par = parabolic_via(problem)
     refs = reference_values(problem, par)
     out: dict[str, Solution] = {}
@@ -277,16 +270,15 @@ def compute_baselines(problem: SwingEnergyProblem) -> dict[str, Solution]:
     return out
 
 
-def _gradient_baseline(problem: SwingEnergyProblem, refs: dict[str, float], label: str,
+def _gradient_baseline(problem: SwingProblem, refs: dict[str, float], label: str,
                        others: dict[str, Solution]) -> Solution:
     """``gradient_min_energy`` (module docstring): SLSQP + grid climb on the minimum-energy
     problem from the coordinated motion, Pérez's GA optimum and each of ``others`` (the
     job's other baselines), the best end point by the feasibility rule; cached like the GA
     baselines."""
     from legcore.optimizers.refine import best_index, refine
-    from legcore.studies.swing_energy.problem import SwingEnergyProblem
-
-    sub = SwingEnergyProblem(problem.source, problem.params, criterion="energy", refs=refs)
+    sub = problem.variant("energy", refs)
+    assert isinstance(sub, Problem)
     starts = {"the coordinated motion": sub.coordinated_x()}
     if "perez2010_min_energy" not in others:
         starts["perez2010_min_energy"] = np.asarray(

@@ -115,7 +115,6 @@ criterion in place of the score (``baseline_generations``, fixed ``baseline_seed
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 import numpy as np
@@ -124,16 +123,14 @@ from numpy.typing import NDArray
 from legcore.chain_points import chain_points
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import mechanical_energy
-from legcore.joint_metrics import joint_metrics
 from legcore.kinematics import fk, jacobian
 from legcore.problems.base import Problem
 from legcore.robots.legged import LeggedRobot
-from legcore.robots.model import Robot
-from legcore.studies.study import Box, Motion, Solution, StudyProblem, Violation
+from legcore.studies.study import Solution, StudyProblem, Violation
+from legcore.studies.swing_energy import decode
 from legcore.studies.swing_energy.defaults import ik_reference
 from legcore.studies.swing_energy.geometry import (
     chain_clearance,
-    point_box_distance,
     travel_and_peak,
     via_basis,
 )
@@ -528,91 +525,9 @@ class SwingEnergyProblem(StudyProblem):
 
     # ------------------------------------------------------------------ decoding
     def solution(self, x: FloatArray, label: str | None = None) -> Solution:
-        """The full decoded trajectory of ``x`` with the seed's Table 2/3 metrics.
-
-        ``objectives``: {"score"}; ``metrics``: score, f_d, f_a, θ_T, D, E, ∫τ²dt, clearances
-        (m; ``obstacle_clearance`` is the least distance of any link segment to the boxes, ≥
-        their ``margin`` when feasible), constraint values, ``feasible`` (1/0), ``on_grid`` (1 when
-        every value is a multiple of the resolution), and ``criterion`` (this problem's F).
-        """
-        x = np.asarray(x, dtype=float)
-        if x.shape != (self.n_var,):
-            raise ValueError(f"x: expected shape ({self.n_var},), got {x.shape}")
-        q, qd, qdd, jerk = (a[0] for a in self.trajectories(x[None]))
-        tau = inverse_dynamics(self.robot, q, qd, qdd)
-        P = self.chain_points(q)  # (K, M, 3)
-        foot = P[:, -1]
-        jm = joint_metrics(self.t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=foot)
-        f_d, f_a = (float(v[0]) for v in self.score_parts(q[None], qdd[None]))
-        score = self.params.w1 * f_d + self.params.w2 * f_a
-        F, G = self.evaluate(x[None])
-        power = tau * qd
-        absp = np.abs(power).sum(axis=1)
-        energy = np.concatenate([[0.0], np.cumsum(0.5 * (absp[1:] + absp[:-1]) * np.diff(self.t))])
-        genes = self.genes(x)
-        if label is None:
-            label = ("Calderón 2015 (proposed): w1 f_d + w2 f_a" if self.criterion == "score"
-                     else f"GA minimising {self.criterion}")
-        metrics: dict[str, float] = {
-            "score": score,
-            "f_d": f_d,
-            "f_a": f_a,
-            "theta_total": float(jm.theta_total),
-            "path_length": float(jm.path_length),
-            "energy_total": float(jm.energy_total),
-            "tau_sq_total": float(jm.tau_sq_total),
-            "duration": float(jm.duration),
-            "criterion": float(F[0, 0]),
-            "ground_clearance": float(P[:, 1:, 2].min() - self.z_ground),
-            "on_grid": float(np.allclose(genes.ravel() * self.res, x, rtol=0.0, atol=1e-9)),
-            "lift_height": float(P[:, -1, 2].max() - self.z_ground),
-        }
-        for name, g in zip(self.constraint_names, G[0], strict=True):
-            metrics[f"g_{name}"] = float(g)
-        metrics["feasible"] = float(np.all(G <= 0.0))
-        scene: dict[str, Any] = {
-            "targets": np.stack([self.foot_start, self.foot_end]),
-            "ground_z": self.z_ground,
-        }
-        if self.boxes:
-            metrics["obstacle_clearance"] = self._clearance(P)
-            scene["obstacles"] = list(self.boxes)
-            scene["obstacle_margin"] = self.margin
-        motion = Motion(
-            t=self.t.copy(), q=q, qd=qd, qdd=qdd, jerk=jerk, tau=tau, power=power, energy=energy,
-            tool=foot, joint_names=_joint_names(self.robot), robot=self.label, scene=scene,
-        )
-        if self.hip is not None:  # one leg of a legged robot: draw it on the body, at its hip
-            motion = _on_body(motion, self.hip, self.robot_name, str(self.params.leg))
-        table = [
-            {"metric": r.label, "key": r.key, "unit": r.unit,
-             **({"values": list(r.per_joint)} if r.per_joint is not None else {"total": r.total})}
-            for r in jm.as_table()
-        ]
-        extra = {
-            "label": label,
-            "criterion": self.criterion,
-            "encoding": self.params.encoding,
-            "genes": genes.tolist(),
-            "via_steps": self.via_steps(x[None])[0].tolist(),
-            "via_points": (self.via_steps(x[None])[0] * self.res).tolist(),
-            "start_steps": self.start_steps.tolist(),
-            "end_steps": self.end_steps.tolist(),
-            "q_start": self.q_start.tolist(),
-            "q_end": self.q_end.tolist(),
-            "resolution": self.res,
-        }
-        return Solution(x=x.copy(), objectives={"score": score}, metrics=metrics, table=table,
-                        motion=motion, extra=extra)
-
-    def _clearance(self, P: FloatArray, per_segment: int = 60) -> float:
-        """Least distance (m) of the sampled link segments P (K, M, 3) to the boxes (no
-        margin)."""
-        lam = np.linspace(0.0, 1.0, per_segment)[:, None]
-        a, b = P[:, :-1, None, :], P[:, 1:, None, :]
-        pts = a + lam * (b - a)  # (K, M - 1, per_segment, 3)
-        return min(float(point_box_distance(pts, box.center, box.half_size).min())
-                   for box in self.boxes)
+        """The full decoded trajectory of ``x`` with the seed's Table 2/3 metrics
+        (:func:`legcore.studies.swing_energy.decode.solution`)."""
+        return decode.solution(self, x, label)
 
     def relaxation(self) -> Any:
         """Continuous relaxation for :func:`legcore.optimizers.refine.refine`: z = the
@@ -639,13 +554,19 @@ class SwingEnergyProblem(StudyProblem):
         return self.encode(self.coord_steps * self.res)
 
     # ------------------------------------------------------------------ baselines
+    def variant(self, criterion: str, refs: dict[str, float] | None = None) -> SwingEnergyProblem:
+        """The same leg, start, end and parameters with ``criterion`` as F (a baseline's
+        problem; ``refs``: the ``multi_criteria`` normalisers)."""
+        return type(self)(self.source, self.params, criterion=criterion, refs=refs)
+
     def companions(self) -> list[tuple[Problem, int]]:
         """The baseline GAs ``finalize`` runs (one per GA criterion asked for), each with the
         baseline population: what :mod:`legcore.memory` sizes the job by besides its own."""
-        from legcore.studies.swing_energy.baselines import ga_baseline_problems
+        from legcore.studies.swing_energy.baselines import MULTI_TERMS, ga_baseline_criteria
 
         pop = int(self.params.baseline_pop_size)
-        return [(sub, pop) for sub in ga_baseline_problems(self)]
+        refs = dict.fromkeys(MULTI_TERMS, 1.0)  # placeholders: same arrays as the real ones
+        return [(self.variant(c, refs), pop) for c in ga_baseline_criteria(self.params)]
 
     def baseline_solutions(self) -> dict[str, Solution]:
         """The seed's comparison trajectories, decoded like the optimum.
@@ -670,36 +591,9 @@ class SwingEnergyProblem(StudyProblem):
         return {k: np.asarray(v.x) for k, v in self.baseline_solutions().items() if v.x is not None}
 
     def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
-        """Study-level facts: start/end, AcC, the obstacle, and the energy comparison."""
-        best_E = None
-        if front_X.shape[0]:
-            q, qd, qdd = self.trajectories(front_X[:1], (0, 1, 2))
-            best_E = float(self.energy(q, qd, qdd)[0])
-        base = self.baseline_solutions()
-        energies = {k: v.metrics["energy_total"] for k, v in base.items()}
-        out: dict[str, Any] = {
-            "q_start": self.q_start.tolist(),
-            "q_end": self.q_end.tolist(),
-            "foot_start": self.foot_start.tolist(),
-            "foot_end": self.foot_end.tolist(),
-            "z_ground": self.z_ground,
-            "acc_coordinated": self.acc_coordinated.tolist(),
-            "theta_min": self.theta_min.tolist(),
-            "obstacle": None if self.box is None else {
-                "center": list(self.box.center), "half_size": list(self.box.half_size),
-                "margin": self.margin},
-            "obstacles": [{"center": list(b.center), "half_size": list(b.half_size),
-                           "margin": m} for b, m in zip(self.boxes, self.margins, strict=True)],
-            "leg": self.label,
-            "tube": self.tube,
-            "energy_best": best_E,
-            "energy_baselines": energies,
-        }
-        if best_E is not None:
-            out["energy_saving_vs_baselines"] = {
-                k: (1.0 - best_E / e) if e > 0 else None for k, e in energies.items()}
-        return out
-
+        """Study-level facts: start/end, AcC, the obstacle, and the energy comparison
+        (:func:`legcore.studies.swing_energy.decode.extras`)."""
+        return decode.extras(self, front_X)
 
 def _ratio(num: FloatArray, den: FloatArray, eps: float) -> FloatArray:
     """min(1, (num + ε)/(den + ε)), with 0/0 := 1 (a joint that does not move meets its goal)."""
@@ -708,27 +602,6 @@ def _ratio(num: FloatArray, den: FloatArray, eps: float) -> FloatArray:
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(d > 0.0, n / np.where(d > 0.0, d, 1.0), 1.0)
     return np.minimum(r, 1.0)
-
-
-def _on_body(motion: Motion, hip: FloatArray, robot: str, leg: str) -> Motion:
-    """``motion`` of one leg moved from its hip frame to the body frame (hip with the body's
-    axes: a translation), named after the whole robot and that leg (for drawing it)."""
-    d = hip[:3, 3]
-    scene = dict(motion.scene)
-    scene["targets"] = np.asarray(scene["targets"]) + d
-    scene["ground_z"] = float(scene["ground_z"] + d[2])
-    if "obstacles" in scene:
-        scene["obstacles"] = [
-            Box(center=(b.center[0] + d[0], b.center[1] + d[1], b.center[2] + d[2]),
-                half_size=b.half_size) for b in scene["obstacles"]]
-    scene["frame"] = f"body frame of {robot} (leg {leg}: its hip at {d.round(4).tolist()} m)"
-    return dataclasses.replace(motion, tool=None if motion.tool is None else motion.tool + d,
-                               robot=robot, legs=(leg,), scene=scene)
-
-
-def _joint_names(robot: Robot) -> tuple[str, ...]:
-    names = [robot.model.names[i] for i in range(1, robot.model.njoints)]
-    return tuple(names) if len(names) == robot.nq else tuple(f"q{i + 1}" for i in range(robot.nq))
 
 
 def incomplete(robot: Any, params: Params) -> bool:
