@@ -7,7 +7,7 @@ optimum.
 - ``seed_max_V`` — the same scheme at the largest single V that keeps every limit.
 
 Baselines are time laws, not decision vectors: each is decoded by
-:meth:`PathTrackingProblem.decode_law` with its violations checked here (on a dense resampling),
+:meth:`TrackingProblem.decode_law` with its violations checked here (on a dense resampling),
 and carries a decision vector only where it has one in the problem's encoding.
 """
 
@@ -15,25 +15,23 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from legcore.studies.path_tracking import limits
+from legcore.studies.path_tracking.contract import TrackingProblem
 from legcore.studies.path_tracking.encodings import SegmentSpeeds
 from legcore.studies.path_tracking.timelaw import TimeLaw
 from legcore.studies.study import Solution
-
-if TYPE_CHECKING:
-    from legcore.studies.path_tracking.problem import PathTrackingProblem
 
 __all__ = ["baseline_solutions", "extras", "reference_optimum", "seed_max_V"]
 
 FloatArray = NDArray[np.float64]
 
 
-def seed_max_V(problem: PathTrackingProblem) -> float:
+def seed_max_V(problem: TrackingProblem) -> float:
     """Largest single V (m/s) for which the seed's scheme (t_a, t_d of ``params``, linear
     ramps) satisfies every constraint; found by batched scans of the V box (nan: none)."""
     assert problem.params.V_bounds is not None
@@ -56,10 +54,10 @@ def seed_max_V(problem: PathTrackingProblem) -> float:
     return best
 
 
-def _seed_solution(problem: PathTrackingProblem, V: float) -> Solution:
+def _seed_solution(problem: TrackingProblem, V: float) -> Solution:
     """The seed's law at speed ``V`` decoded, with its violations."""
     p = problem.params
-    trapezoid: SegmentSpeeds = problem._trapezoid
+    trapezoid: SegmentSpeeds = problem.trapezoid
     x = trapezoid.x_of(V, p.t_a, p.t_d, p.ramp_bounds[0])
     law = trapezoid.law(x[None, :], "linear")
     own = x if problem.encoding is trapezoid else None
@@ -67,12 +65,12 @@ def _seed_solution(problem: PathTrackingProblem, V: float) -> Solution:
     return _with_violations(problem, sol, law)
 
 
-def _with_violations(problem: PathTrackingProblem, sol: Solution, law: TimeLaw) -> Solution:
+def _with_violations(problem: TrackingProblem, sol: Solution, law: TimeLaw) -> Solution:
     """``sol`` with what its ``law`` violates (a dense resampling, as every answer)."""
     return dataclasses.replace(sol, violations=limits.limit_violations(problem, law))
 
 
-def baseline_solutions(problem: PathTrackingProblem) -> dict[str, Solution]:
+def baseline_solutions(problem: TrackingProblem) -> dict[str, Solution]:
     """``time_optimal`` (when a profile exists), ``seed`` and ``seed_max_V`` (when the seed's
     scheme is feasible at some V)."""
     out: dict[str, Solution] = {}
@@ -89,7 +87,7 @@ def baseline_solutions(problem: PathTrackingProblem) -> dict[str, Solution]:
     return out
 
 
-def reference_optimum(problem: PathTrackingProblem) -> dict[str, Any] | None:
+def reference_optimum(problem: TrackingProblem) -> dict[str, Any] | None:
     """The best any answer can do on a single ``time`` objective: the physical minimum's
     cycle time (s), with what it is; None for other objectives or when no profile exists."""
     best = problem.time_optimal
@@ -99,13 +97,13 @@ def reference_optimum(problem: PathTrackingProblem) -> dict[str, Any] | None:
             "method": f"TOPP-RA, {best.grid.size - 1} intervals, limits × {best.scale:.6g}"}
 
 
-def extras(problem: PathTrackingProblem, front_X: FloatArray, front_F: FloatArray
+def extras(problem: TrackingProblem, front_X: FloatArray, front_F: FloatArray
            ) -> dict[str, Any]:
     """The front in readable form with the % change of each objective against the seed law
     (only when that law is feasible on this arm: else None, and ``change_pct_reason`` says
     which limits it breaks), and the physical minimum (``time_optimal``: T s, its grid and
     limit scale, the raw TOPP-RA T at the limits themselves)."""
-    seed = problem._objectives(problem.simulate(problem.seed_law()))[0]
+    seed = problem.objectives(problem.simulate(problem.seed_law()))[0]
     broken = problem.seed_violations()
     rows = []
     for x, f in zip(np.atleast_2d(front_X), np.atleast_2d(front_F), strict=True):

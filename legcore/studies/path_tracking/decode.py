@@ -6,7 +6,7 @@ values, energy per joint, path and orientation errors, the law's form)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -14,11 +14,9 @@ from numpy.typing import NDArray
 from legcore import kinematics
 from legcore.joint_metrics import joint_metrics
 from legcore.problems.base import constraint_violation
+from legcore.studies.path_tracking.contract import TrackingProblem
 from legcore.studies.path_tracking.timelaw import RampShape, TimeLaw, segment_profiles
 from legcore.studies.study import Motion, Solution
-
-if TYPE_CHECKING:
-    from legcore.studies.path_tracking.problem import PathTrackingProblem
 
 __all__ = ["decode_law"]
 
@@ -30,7 +28,7 @@ def _cumulative_trapezoid(y: FloatArray, t: FloatArray) -> FloatArray:
     return np.concatenate([[0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t))])
 
 
-def decode_law(problem: PathTrackingProblem, law: TimeLaw, x: FloatArray | None = None,
+def decode_law(problem: TrackingProblem, law: TimeLaw, x: FloatArray | None = None,
                encoded: dict[str, float] | None = None, shape: RampShape | None = None
                ) -> Solution:
     """The Solution of one time ``law`` (B = 1) of ``problem``: of the decision vector ``x``
@@ -46,7 +44,7 @@ def decode_law(problem: PathTrackingProblem, law: TimeLaw, x: FloatArray | None 
     energy = _cumulative_trapezoid(np.abs(power).sum(axis=1), t)
     G = sim["G"][0]
     if problem.limit_check > 1:
-        G = problem._dense_limits(law, sim["G"], problem.limit_check)[0]
+        G = problem.dense_limits(law, sim["G"], problem.limit_check)[0]
     cv = float(constraint_violation(G[None, :])[0])
     seg_T = law.segment_times()[0]
     jm = joint_metrics(t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=tool)

@@ -16,16 +16,12 @@ limits. So, for a task whose ``limit_check`` > 1:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import NDArray
 
+from legcore.studies.path_tracking.contract import TrackingProblem
 from legcore.studies.path_tracking.timelaw import RampShape, TimeLaw
 from legcore.studies.task import Violation
-
-if TYPE_CHECKING:
-    from legcore.studies.path_tracking.problem import PathTrackingProblem
 
 __all__ = ["DENSE_CHECK", "dense_limits", "edge_times", "limit_violations"]
 
@@ -41,7 +37,7 @@ def _near(K: int) -> float:
     return min(0.5, 0.02 * (400.0 / K) ** 2)
 
 
-def edge_times(problem: PathTrackingProblem, law: TimeLaw) -> FloatArray:
+def edge_times(problem: TrackingProblem, law: TimeLaw) -> FloatArray:
     """(B, E) instants where the joint accelerations jump (s): just before every phase
     boundary of the law (a linear ramp's σ̈ jumps there) and just before and after every
     join of two segments (the path's curvature, so q″, jumps there) — the one-sided
@@ -56,7 +52,7 @@ def edge_times(problem: PathTrackingProblem, law: TimeLaw) -> FloatArray:
     return np.clip(np.concatenate(parts, axis=1), 0.0, law.T[:, None])
 
 
-def dense_limits(problem: PathTrackingProblem, X: FloatArray | TimeLaw, G: FloatArray,
+def dense_limits(problem: TrackingProblem, X: FloatArray | TimeLaw, G: FloatArray,
                  factor: int, shape: RampShape | None = None, every: bool = False
                  ) -> FloatArray:
     """``G`` (B, n_constr) of decision vectors ``X`` (or of time laws) with the joint-limit
@@ -79,7 +75,7 @@ def dense_limits(problem: PathTrackingProblem, X: FloatArray | TimeLaw, G: Float
     return G
 
 
-def limit_violations(problem: PathTrackingProblem, x: FloatArray | TimeLaw,
+def limit_violations(problem: TrackingProblem, x: FloatArray | TimeLaw,
                      shape: RampShape | None = None) -> tuple[Violation, ...]:
     """What the motion of ``x`` (with the ramp ``shape``; None: ``params.ramp``) or of one
     time law breaks, on its samples, at least 10 × ``n_samples`` samples and the

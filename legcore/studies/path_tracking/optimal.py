@@ -18,19 +18,14 @@ typically 1e-4–1e-3 below the limits). Then:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
-
 import numpy as np
 from numpy.typing import NDArray
 
 from legcore.studies.path_tracking import limits
+from legcore.studies.path_tracking.contract import PhysicalMinimum, TrackingProblem
 from legcore.studies.path_tracking.encodings import SpeedProfile, profile_knots
 from legcore.studies.path_tracking.timelaw import TimeLaw, profile_law
 from legcore.studies.path_tracking.topp import time_optimal
-
-if TYPE_CHECKING:
-    from legcore.studies.path_tracking.problem import PathTrackingProblem
 
 __all__ = ["FINE_INTERVALS", "PhysicalMinimum", "feasible_profile", "initial_points",
            "knot_speed_caps", "physical_minimum"]
@@ -45,27 +40,7 @@ _ROUNDS = 8  # tightenings at most
 _SLOWER = (0.8, 0.6, 0.4, 0.25, 0.15)  # speed factors of the slower starting copies
 
 
-@dataclass(frozen=True, eq=False)
-class PhysicalMinimum:
-    """A time-optimal profile that keeps every limit on a dense resampling: ``grid`` (N + 1,)
-    m, ``speed`` (N + 1,) m/s, ``T`` s; ``scale`` the factor (≤ 1) the limits were multiplied
-    by for it, ``T_at_limits`` s TOPP-RA's time at the limits themselves (kept at the
-    gridpoints only); ``law`` the profile as a time law (B = 1)."""
-
-    grid: FloatArray
-    speed: FloatArray
-    T: float
-    scale: float
-    T_at_limits: float
-    law: TimeLaw
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"T": self.T, "T_at_limits": self.T_at_limits, "limit_scale": self.scale,
-                "intervals": int(self.grid.size - 1), "method": "TOPP-RA",
-                "v_peak": float(self.speed.max())}
-
-
-def _overshoot(problem: PathTrackingProblem, law: TimeLaw) -> float:
+def _overshoot(problem: TrackingProblem, law: TimeLaw) -> float:
     """The largest fraction by which the motion of ``law`` exceeds a joint limit on a dense
     resampling (≤ 0: none)."""
     factor = max(problem.limit_check, limits.DENSE_CHECK)
@@ -74,7 +49,7 @@ def _overshoot(problem: PathTrackingProblem, law: TimeLaw) -> float:
     return float(G[0, : 3 * problem.robot.nq].max())
 
 
-def feasible_profile(problem: PathTrackingProblem, grid: FloatArray) -> PhysicalMinimum | None:
+def feasible_profile(problem: TrackingProblem, grid: FloatArray) -> PhysicalMinimum | None:
     """TOPP-RA's profile on ``grid`` (m) tightened until it keeps every limit on a dense
     resampling (module docstring); None when no profile exists or none is found."""
     r = problem.robot
@@ -95,13 +70,13 @@ def feasible_profile(problem: PathTrackingProblem, grid: FloatArray) -> Physical
     return None
 
 
-def physical_minimum(problem: PathTrackingProblem) -> PhysicalMinimum | None:
+def physical_minimum(problem: TrackingProblem) -> PhysicalMinimum | None:
     """The physical minimum of ``problem``'s path: :func:`feasible_profile` on
     ``FINE_INTERVALS`` intervals (a gridpoint on every join)."""
     return feasible_profile(problem, profile_knots(problem.path.lengths, FINE_INTERVALS))
 
 
-def knot_speed_caps(problem: PathTrackingProblem, knots: FloatArray) -> FloatArray:
+def knot_speed_caps(problem: TrackingProblem, knots: FloatArray) -> FloatArray:
     """The fastest tool speed (M + 1,) m/s at each knot at which every joint keeps its speed
     limit, on both sides of the knot (at most 10 × ``V_bounds[1]``)."""
     assert problem.params.V_bounds is not None
@@ -114,7 +89,7 @@ def knot_speed_caps(problem: PathTrackingProblem, knots: FloatArray) -> FloatArr
     return np.minimum(v, 10.0 * problem.params.V_bounds[1])
 
 
-def initial_points(problem: PathTrackingProblem) -> FloatArray:
+def initial_points(problem: TrackingProblem) -> FloatArray:
     """Starting decision vectors (k, n_var) of a speed-profile encoding: the time-optimal
     profile on its knots (:func:`feasible_profile`), slower copies of it (speeds × 0.8 …
     0.15: accelerations × their square) and the seed law's speeds at the knots, each inside

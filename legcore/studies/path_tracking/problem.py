@@ -159,8 +159,10 @@ class PathTrackingProblem(StudyProblem):
         self.n_samples = params.n_samples
         self.joints: JointPath = joint_path(robot, self.path, self.tool, rest)
         check_slowest_speed(self.joints, self.path, robot, params.V_bounds[0])
-        self._trapezoid = SegmentSpeeds(self.path.lengths, params.speeds == "single",
-                                        params.ramp)
+        #: the trapezoid coding of the seed's law (the problem's own with a ``speeds`` of
+        #: ``per_segment`` or ``single``)
+        self.trapezoid = SegmentSpeeds(self.path.lengths, params.speeds == "single",
+                                       params.ramp)
         self.encoding: SegmentSpeeds | SpeedProfile
         if params.speeds == "profile":
             self.encoding = SpeedProfile(self.path.lengths,
@@ -169,8 +171,8 @@ class PathTrackingProblem(StudyProblem):
             caps = optimal.knot_speed_caps(self, self.encoding.knots)
             xl, xu = self.encoding.bounds(params.V_bounds[0], caps)
         else:
-            self.encoding = self._trapezoid
-            xl, xu = self._trapezoid.bounds(
+            self.encoding = self.trapezoid
+            xl, xu = self.trapezoid.bounds(
                 params.V_bounds[0], speed_caps(self.joints, robot.qd_max, params.V_bounds),
                 params.ramp_bounds)
         names = self.encoding.variable_names
@@ -218,9 +220,9 @@ class PathTrackingProblem(StudyProblem):
         p = self.params
         assert p.V is not None
         Vs = np.atleast_1d(np.asarray(p.V if V is None else V, dtype=float))
-        X = np.stack([self._trapezoid.x_of(float(v), p.t_a, p.t_d, p.ramp_bounds[0])
+        X = np.stack([self.trapezoid.x_of(float(v), p.t_a, p.t_d, p.ramp_bounds[0])
                       for v in Vs])
-        return self._trapezoid.law(X, "linear")
+        return self.trapezoid.law(X, "linear")
 
     def seed_x(self, V: float | None = None) -> FloatArray:
         """The seed's law as a decision vector: one speed ``V`` (default ``params.V``) on every
@@ -286,7 +288,8 @@ class PathTrackingProblem(StudyProblem):
             out.update(p=P[0], pd=P[1], pdd=P[2], pddd=P[3])
         return out
 
-    def _objectives(self, sim: dict[str, Any]) -> FloatArray:
+    def objectives(self, sim: dict[str, Any]) -> FloatArray:
+        """F (B, n_obj) of a simulation (:meth:`simulate`): the cycle time T s and/or energy E J."""
         key = {"time": "T", "energy": "E"}
         return np.stack([sim[key[name]] for name in self.objective_names], axis=1)
 
@@ -294,15 +297,17 @@ class PathTrackingProblem(StudyProblem):
         sim = self.simulate(X, full=False)
         G = sim["G"]
         if self.limit_check > 1:
-            G = self._dense_limits(X, G, self.limit_check)
-        return self._objectives(sim), G
+            G = self.dense_limits(X, G, self.limit_check)
+        return self.objectives(sim), G
 
     def edge_times(self, law: TimeLaw) -> FloatArray:
         """(B, E) instants where the joint accelerations jump (:func:`.limits.edge_times`)."""
         return limits.edge_times(self, law)
 
-    def _dense_limits(self, X: FloatArray | TimeLaw, G: FloatArray, factor: int,
-                      shape: RampShape | None = None, every: bool = False) -> FloatArray:
+    def dense_limits(self, X: FloatArray | TimeLaw, G: FloatArray, factor: int,
+                     shape: RampShape | None = None, every: bool = False) -> FloatArray:
+        """G with the limits checked on a resampling ``factor`` × denser
+        (:func:`.limits.dense_limits`)."""
         return limits.dense_limits(self, X, G, factor, shape, every)
 
     # ------------------------------------------------------------------ decoding
