@@ -44,6 +44,7 @@ sys.path.insert(0, str(ROOT))
 from sqlalchemy import bindparam, func, literal, select, text, update  # noqa: E402
 
 from services.api.lookups import study_defaults  # noqa: E402
+from services.store import api_keys  # noqa: E402
 from services.store import dashboard_queries as dq  # noqa: E402
 from services.store import repository as repo  # noqa: E402
 from services.store.keys import generate_api_key  # noqa: E402
@@ -223,7 +224,7 @@ def bench(
     ctx = app.state.context
     raw, key_hash = generate_api_key()
     with ctx.write() as s:
-        key_id = repo.create_api_key(s, name="bench", key_hash=key_hash).id
+        key_id = api_keys.create_api_key(s, name="bench", key_hash=key_hash).id
     h = {"X-API-Key": raw}
     rows: list[tuple[str, int, str, str]] = []
     store_rows: list[tuple[str, int, str]] = []

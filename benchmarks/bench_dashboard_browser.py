@@ -114,7 +114,7 @@ def environment(data: Path) -> dict[str, str]:
 def setup(data: Path) -> tuple[Any, str, str]:
     """Migrate, create the key; the API context, the key's id and its raw key."""
     from services.api.deps import ApiContext
-    from services.store import repository as repo
+    from services.store import api_keys
     from services.store.keys import generate_api_key
     from services.store.migrate import upgrade
     from services.store.settings import Settings, get_settings
@@ -126,7 +126,7 @@ def setup(data: Path) -> tuple[Any, str, str]:
     ctx = ApiContext(settings=Settings.from_env())
     raw, key_hash = generate_api_key()
     with ctx.write() as s:
-        key_id = repo.create_api_key(s, name="bench", key_hash=key_hash).id
+        key_id = api_keys.create_api_key(s, name="bench", key_hash=key_hash).id
     return ctx, key_id, raw
 
 

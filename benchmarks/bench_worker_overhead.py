@@ -63,7 +63,7 @@ def _artifact_sizes(job_id: str) -> dict[str, int]:
 
 def bench(path: str, pairs: int) -> dict[str, Any]:
     import legcore
-    from services.store import repository as repo
+    from services.store import api_keys
     from services.store.keys import generate_api_key
     from services.store.session import session_scope
     from services.worker.execute import execute_job
@@ -74,7 +74,7 @@ def bench(path: str, pairs: int) -> dict[str, Any]:
         settings = _setup(Path(tmp))
         db = Path(tmp) / "legopt.db"
         with session_scope() as s:
-            key = repo.create_api_key(s, name="bench", key_hash=generate_api_key()[1]).id
+            key = api_keys.create_api_key(s, name="bench", key_hash=generate_api_key()[1]).id
         legcore.run(spec)  # warm: numba, the study's baselines
         for warm in (plain, recorded):
             assert execute_job(_new_job(warm, key), settings).status == "succeeded"

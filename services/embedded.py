@@ -60,8 +60,8 @@ def ensure_database(settings: Settings) -> None:
 def ensure_local_api_key(settings: Settings) -> tuple[str, bool]:
     """The local API key (``<data_dir>/api-key``, an admin key: the machine owner's), created
     on first start; (key, created)."""
+    from services.store.api_keys import create_api_key, get_api_key_by_hash
     from services.store.keys import generate_api_key, hash_api_key
-    from services.store.repository import create_api_key, get_api_key_by_hash
     from services.store.session import session_scope
 
     path = Path(settings.data_dir) / API_KEY_FILE

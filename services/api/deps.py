@@ -30,10 +30,10 @@ from services.api.rate_limit import (
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT
 from services.api.sweeps import MAX_SWEEP_JOBS
 from services.api.warmup import Warmup
+from services.store.api_keys import get_api_key_by_hash
 from services.store.artifacts import ArtifactStore
 from services.store.keys import hash_api_key
 from services.store.records import ApiKeyRecord
-from services.store.repository import get_api_key_by_hash
 from services.store.session import engine_from_settings, make_session_factory, session_scope
 from services.store.settings import Settings
 from services.store.sql import now_utc

@@ -204,8 +204,8 @@ def keys_create(
     from datetime import timedelta
 
     from services.embedded import ensure_database
+    from services.store.api_keys import create_api_key
     from services.store.keys import generate_api_key
-    from services.store.repository import create_api_key
     from services.store.session import session_scope
     from services.store.settings import get_settings
     from services.store.sql import now_utc
@@ -223,7 +223,7 @@ def keys_create(
 @keys_app.command("list")
 def keys_list() -> None:
     """The keys of the configured database: id, name, role, expiry, revocation."""
-    from services.store.repository import list_api_keys
+    from services.store.api_keys import list_api_keys
     from services.store.session import session_scope
 
     table = Table("id", "name", "role", "created", "expires", "revoked")
@@ -246,7 +246,7 @@ def keys_list() -> None:
 @keys_app.command("revoke")
 def keys_revoke(key_id: Annotated[str, typer.Argument(help="id of the key (keys list)")]) -> None:
     """Revoke a key: it is refused from now on; what it created stays."""
-    from services.store.repository import get_api_key, revoke_api_key
+    from services.store.api_keys import get_api_key, revoke_api_key
     from services.store.session import session_scope
 
     with session_scope() as s:

@@ -15,6 +15,13 @@ Modules: ``settings`` (``Settings``, ``get_settings``), ``tables`` (the schema),
 ``keys`` (API key hashing), ``migrate`` (Alembic from Python).
 """
 
+from services.store.api_keys import (
+    create_api_key,
+    delete_api_key,
+    get_api_key,
+    get_api_key_by_hash,
+    list_api_keys,
+)
 from services.store.artifacts import ArtifactStore, StoredFile
 from services.store.errors import (
     ArtifactError,
@@ -69,19 +76,14 @@ from services.store.records import (
 )
 from services.store.repository import (
     count_jobs_by_status,
-    create_api_key,
     create_job,
     create_robot,
     create_sweep,
-    delete_api_key,
     delete_robot,
-    get_api_key,
-    get_api_key_by_hash,
     get_job,
     get_robot,
     get_robot_by_name,
     get_sweep,
-    list_api_keys,
     list_jobs,
     list_robots,
     list_sweeps,

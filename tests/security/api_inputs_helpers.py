@@ -13,8 +13,8 @@ from httpx import Response
 
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.store.api_keys import create_api_key
 from services.store.keys import generate_api_key
-from services.store.repository import create_api_key
 from services.store.settings import Settings
 
 API = "/api/v1"

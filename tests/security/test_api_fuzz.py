@@ -33,8 +33,8 @@ from schemathesis import GenerationMode
 
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.store.api_keys import create_api_key
 from services.store.keys import generate_api_key
-from services.store.repository import create_api_key
 from services.store.settings import Settings
 from tests.integration.stack import postgres_missing, services_required, when_available
 from tests.security.databases import DATABASES, migrated_settings

@@ -32,8 +32,8 @@ from httpx import Response
 
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.store.api_keys import create_api_key
 from services.store.keys import generate_api_key
-from services.store.repository import create_api_key
 from services.store.settings import Settings
 from tests.services.api.api_helpers import dh_spec
 

@@ -11,7 +11,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictInt
 from services.api.deps import AdminKey, Context, CurrentKey, Pagination
 from services.api.errors import not_found
 from services.api.schemas import ErrorOut, Page
-from services.store import repository as repo
+from services.store import api_keys
 from services.store.keys import generate_api_key
 from services.store.quotas import usage
 from services.store.records import ApiKeyRecord
@@ -110,7 +110,7 @@ def my_key(key: CurrentKey, ctx: Context) -> UsageOut:
 def list_keys(_admin: AdminKey, ctx: Context, page: Pagination) -> Page[KeyOut]:
     """Every key, oldest first."""
     with ctx.read() as session:
-        keys = repo.list_api_keys(session, limit=page.limit, offset=page.offset)
+        keys = api_keys.list_api_keys(session, limit=page.limit, offset=page.offset)
     return Page[KeyOut](
         items=[KeyOut.from_record(k) for k in keys.items],
         total=keys.total,
@@ -135,7 +135,7 @@ def create_key(
     if body.expires_in_days is not None:
         expires = now_utc() + timedelta(days=body.expires_in_days)
     with ctx.write() as session:
-        record = repo.create_api_key(
+        record = api_keys.create_api_key(
             session,
             name=body.name,
             key_hash=key_hash,
@@ -165,9 +165,9 @@ def revoke_key(key_id: str, admin: AdminKey, ctx: Context) -> KeyOut:
             status.HTTP_409_CONFLICT, "an admin cannot revoke the key it is using"
         )
     with ctx.write() as session:
-        if repo.get_api_key(session, key_id) is None:
+        if api_keys.get_api_key(session, key_id) is None:
             raise not_found("API key", key_id)
-        repo.revoke_api_key(session, key_id)
-        record = repo.get_api_key(session, key_id)
+        api_keys.revoke_api_key(session, key_id)
+        record = api_keys.get_api_key(session, key_id)
     assert record is not None
     return KeyOut.from_record(record)

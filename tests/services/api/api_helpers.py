@@ -17,9 +17,9 @@ from sqlalchemy import func, select
 
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.store.api_keys import create_api_key
 from services.store.keys import generate_api_key
 from services.store.migrate import upgrade
-from services.store.repository import create_api_key
 from services.store.session import reset_engine
 from services.store.settings import Settings, get_settings
 from services.store.tables import JOBS, ROBOTS, SWEEPS

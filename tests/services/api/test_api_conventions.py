@@ -19,6 +19,7 @@ from fastapi.testclient import TestClient
 from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.store import api_keys
 from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.settings import Settings
@@ -142,7 +143,7 @@ def test_a_job_refuses_booleans_as_integers(client: TestClient, alice: dict[str,
 def test_a_key_refuses_booleans_as_integer_limits(client: TestClient, ctx: ApiContext) -> None:
     raw, key_hash = generate_api_key()
     with ctx.write() as s:
-        repo.create_api_key(s, name="root", key_hash=key_hash, role=KeyRole.ADMIN)
+        api_keys.create_api_key(s, name="root", key_hash=key_hash, role=KeyRole.ADMIN)
     admin = {"X-API-Key": raw}
     for field in ("max_active_jobs", "max_storage_bytes"):
         r = client.post(f"{API}/keys", json={"name": "k", field: True}, headers=admin)

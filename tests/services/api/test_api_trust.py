@@ -15,6 +15,7 @@ from sqlalchemy import func, select
 from legcore.studies.registry import studies
 from services.api.app import create_app
 from services.api.deps import ApiContext
+from services.store import api_keys
 from services.store import repository as repo
 from services.store.keys import generate_api_key
 from services.store.lifecycle import claim_job, fail_job
@@ -182,7 +183,7 @@ def test_rate_limit_is_429_with_retry_after(settings: Settings) -> None:
 def _admin(ctx: ApiContext) -> dict[str, str]:
     raw, key_hash = generate_api_key()
     with ctx.write() as s:
-        repo.create_api_key(s, name="root", key_hash=key_hash, role=KeyRole.ADMIN)
+        api_keys.create_api_key(s, name="root", key_hash=key_hash, role=KeyRole.ADMIN)
     return {"X-API-Key": raw}
 
 
@@ -207,7 +208,7 @@ def test_admin_creates_lists_and_revokes_keys(
 def test_expired_key_is_refused(client: TestClient, ctx: ApiContext) -> None:
     raw, key_hash = generate_api_key()
     with ctx.write() as s:
-        repo.create_api_key(
+        api_keys.create_api_key(
             s, name="old", key_hash=key_hash, expires_at=repo.now_utc() - timedelta(seconds=1)
         )
     r = client.get(f"{API}/jobs", headers={"X-API-Key": raw})

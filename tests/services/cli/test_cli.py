@@ -83,8 +83,8 @@ def test_keys_create_admin_list_and_revoke(tmp_path: Path, monkeypatch: object) 
     """`legopt keys`: an admin key, an expiring key, the listing, revocation (defect 12)."""
     import pytest
 
+    from services.store.api_keys import get_api_key_by_hash
     from services.store.keys import hash_api_key
-    from services.store.repository import get_api_key_by_hash
     from services.store.session import reset_engine, session_scope
     from services.store.settings import get_settings
 

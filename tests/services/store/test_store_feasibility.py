@@ -15,8 +15,8 @@ from sqlalchemy.orm import sessionmaker
 from store_testdb import sqlite_url
 
 from services.api.lookups import study_defaults
+from services.store import api_keys, migrate
 from services.store import dashboard_queries as dq
-from services.store import migrate
 from services.store import repository as repo
 from services.store.lifecycle import claim_job, finish_job
 from services.store.records import JobRecord, ParetoPointIn, ResultIn
@@ -36,7 +36,7 @@ VIOLATIONS = [
 def _jobs(engine: Engine, n: int) -> tuple[str, list[str]]:
     """A key with ``n`` running jobs (claimed by worker w1); the key id and the job ids."""
     with session_scope(engine) as s:
-        key = repo.create_api_key(s, name="k", key_hash=f"h-{datetime.now().timestamp()}")
+        key = api_keys.create_api_key(s, name="k", key_hash=f"h-{datetime.now().timestamp()}")
         ids = repo.create_jobs(
             s, owner_key_id=key.id, total_generations=[5] * n, now=T0,
             specs=[{"problem": {"kind": "quadruped_gait"}, "seed": i} for i in range(n)],
@@ -138,7 +138,7 @@ def test_revision_0008_adds_the_verdict_to_a_store_with_jobs(tmp_path: Path) -> 
     migrate.upgrade(url, revision="0007")
     eng = create_engine(url)
     with sessionmaker(eng).begin() as s:  # api_keys is the same at 0007 and head
-        key_id = repo.create_api_key(s, name="old", key_hash="o" * 64).id
+        key_id = api_keys.create_api_key(s, name="old", key_hash="o" * 64).id
     with eng.begin() as c:
         c.execute(
             text("INSERT INTO jobs (id, owner_key_id, status, progress_generation, "

@@ -16,6 +16,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from store_testdb import sqlite_url
 
 from services.api.lookups import study_defaults
+from services.store import api_keys
 from services.store import dashboard_queries as dq
 from services.store import repository as repo
 from services.store.progress import first_objective
@@ -83,7 +84,7 @@ def _reference(rows: list[dq.JobRow], sort: str, descending: bool) -> list[str]:
 def filled(engine: Engine) -> tuple[sessionmaker[Session], str]:
     factory = sessionmaker(engine)
     with factory.begin() as s:
-        key_id = repo.create_api_key(s, name="pages", key_hash="h" * 64).id
+        key_id = api_keys.create_api_key(s, name="pages", key_hash="h" * 64).id
         _fill(s, key_id)
     return factory, key_id
 
@@ -147,7 +148,7 @@ def test_keyset_pages_scan_the_sort_columns_index(tmp_path: Path) -> None:
     Base.metadata.create_all(engine)
     factory = sessionmaker(engine)
     with factory.begin() as s:
-        key_id = repo.create_api_key(s, name="plan", key_hash="p" * 64).id
+        key_id = api_keys.create_api_key(s, name="plan", key_hash="p" * 64).id
         _fill(s, key_id)
     with factory() as s:
         for sort, index in [
@@ -198,7 +199,7 @@ def test_migration_fills_best_value(tmp_path: Any) -> None:
     migrate.upgrade(url, revision="0005")
     eng = create_engine(url)
     with sessionmaker(eng).begin() as s:  # api_keys is the same at 0005 and head
-        key_id = repo.create_api_key(s, name="old", key_hash="o" * 64).id
+        key_id = api_keys.create_api_key(s, name="old", key_hash="o" * 64).id
     with eng.begin() as c:
         for i, best in enumerate(["[4.5, 1]", "7", None, '["x"]']):
             c.execute(

@@ -16,8 +16,8 @@ from search_jobs import N, _fill, _ids, _texts
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
+from services.store import api_keys
 from services.store import dashboard_queries as dq
-from services.store import repository as repo
 from services.store.states import JobStatus
 
 #: What a user types: words of every length, LIKE's wildcards, quotes, case, several words.
@@ -46,8 +46,8 @@ def filled(engine: Engine) -> tuple[sessionmaker[Session], str]:
     """A key with N jobs, and another key with N jobs the first must never find."""
     factory = sessionmaker(engine)
     with factory.begin() as s:
-        key_id = repo.create_api_key(s, name="search", key_hash="s" * 64).id
-        other = repo.create_api_key(s, name="other", key_hash="o" * 64).id
+        key_id = api_keys.create_api_key(s, name="search", key_hash="s" * 64).id
+        other = api_keys.create_api_key(s, name="other", key_hash="o" * 64).id
         _fill(s, key_id)
         _fill(s, other, start=N)
     return factory, key_id

@@ -21,8 +21,8 @@ from sqlalchemy.pool import NullPool
 from store_testdb import PG_ADMIN_URL, requires_postgres, sqlite_url
 
 from services.api.lookups import study_defaults
+from services.store import api_keys, migrate, search_index
 from services.store import dashboard_queries as dq
-from services.store import migrate, search_index
 from services.store import repository as repo
 from services.store.search_index import SEARCH_FTS, SEARCH_TRGM_INDEX
 from services.store.session import make_engine
@@ -41,8 +41,8 @@ def test_the_fts_table_follows_the_labels(tmp_path: Path) -> None:
     Base.metadata.create_all(engine)
     factory = sessionmaker(engine)
     with factory.begin() as s:
-        key_id = repo.create_api_key(s, name="k", key_hash="k" * 64).id
-        gone_key = repo.create_api_key(s, name="gone", key_hash="g" * 64).id
+        key_id = api_keys.create_api_key(s, name="k", key_hash="k" * 64).id
+        gone_key = api_keys.create_api_key(s, name="gone", key_hash="g" * 64).id
         ids = _fill(s, key_id, n=6)
         _fill(s, gone_key, n=4)
     with factory.begin() as s:
@@ -51,7 +51,7 @@ def test_the_fts_table_follows_the_labels(tmp_path: Path) -> None:
         s.execute(
             update(JOB_LABELS).where(JOB_LABELS.c.job_id == ids[1]).values(search="renamed xyz")
         )
-        assert repo.delete_api_key(s, gone_key)  # cascades through jobs to labels
+        assert api_keys.delete_api_key(s, gone_key)  # cascades through jobs to labels
     with factory() as s:
         assert len(_fts_rows(s, "seed=")) == 4
         assert _ids(dq.list_job_rows(s, key_id, dq.JobFilter(search="xyz"))) == [ids[1]]
@@ -102,7 +102,7 @@ def test_sqlite_search_and_first_page_read_indexes(tmp_path: Path) -> None:
     engine = make_engine(sqlite_url(tmp_path))
     Base.metadata.create_all(engine)
     with sessionmaker(engine).begin() as s:
-        key_id = repo.create_api_key(s, name="k", key_hash="p" * 64).id
+        key_id = api_keys.create_api_key(s, name="k", key_hash="p" * 64).id
         _fill(s, key_id)
 
     for f, sort in [
@@ -161,7 +161,7 @@ def test_postgres_search_and_first_page_read_indexes(pg_migrated: Engine) -> Non
         assert SEARCH_TRGM_INDEX in _pg_indexes(c)
     factory = sessionmaker(engine)
     with factory.begin() as s:
-        key_id = repo.create_api_key(s, name="k", key_hash="q" * 64).id
+        key_id = api_keys.create_api_key(s, name="k", key_hash="q" * 64).id
         specs = [
             {"name": f"job {i}", "problem": {"kind": KINDS[i % 3]}, "seed": i % 97}
             for i in range(3000)
@@ -194,7 +194,7 @@ def test_sqlite_without_trigram_fts_searches_by_like(
     Base.metadata.create_all(engine)
     factory = sessionmaker(engine)
     with factory.begin() as s:
-        key_id = repo.create_api_key(s, name="k", key_hash="n" * 64).id
+        key_id = api_keys.create_api_key(s, name="k", key_hash="n" * 64).id
         _fill(s, key_id, n=12)
     with factory() as s:
         assert (
@@ -284,7 +284,7 @@ def test_postgres_without_pg_trgm_migrates_and_searches_by_like(pg_empty_url: st
             assert SEARCH_TRGM_INDEX not in set(names.scalars())
         factory = sessionmaker(engine)
         with factory.begin() as s:
-            key_id = repo.create_api_key(s, name="k", key_hash="r" * 64).id
+            key_id = api_keys.create_api_key(s, name="k", key_hash="r" * 64).id
             _fill(s, key_id, n=9)
         with factory() as s:
             texts = _texts(s, key_id)

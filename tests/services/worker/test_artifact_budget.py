@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from services.store import api_keys
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.artifacts import ArtifactStore
@@ -28,7 +29,7 @@ TINY: dict[str, Any] = {  # the issue's 3-generation job: seed 002's study, its 
 
 def test_a_tiny_jobs_artifacts_are_within_the_documented_budget(settings: Settings) -> None:
     with session_scope() as s:
-        key = repo.create_api_key(s, name="t", key_hash=generate_api_key()[1])
+        key = api_keys.create_api_key(s, name="t", key_hash=generate_api_key()[1])
         job_id = repo.create_job(s, owner_key_id=key.id, spec=TINY, total_generations=3).id
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
     with session_scope() as s:

@@ -12,6 +12,7 @@ import pytest
 
 from legcore.optimizers import to_jsonable
 from legcore.runner import prepare
+from services.store import api_keys
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.keys import generate_api_key
@@ -32,7 +33,7 @@ SPEC: dict[str, Any] = {
 
 def _job(spec: dict[str, Any], total: int = 6) -> str:
     with session_scope() as s:
-        key = repo.create_api_key(s, name="t", key_hash=generate_api_key()[1])
+        key = api_keys.create_api_key(s, name="t", key_hash=generate_api_key()[1])
         return repo.create_job(s, owner_key_id=key.id, spec=spec, total_generations=total).id
 
 

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from services.store import lifecycle
+from services.store import api_keys, lifecycle
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.keys import generate_api_key
@@ -31,7 +31,7 @@ SPEC: dict[str, Any] = {
 
 def _job(spec: dict[str, Any]) -> str:
     with session_scope() as s:
-        key = repo.create_api_key(s, name="t", key_hash=generate_api_key()[1])
+        key = api_keys.create_api_key(s, name="t", key_hash=generate_api_key()[1])
         total = spec["budget"]["generations"]
         return repo.create_job(s, owner_key_id=key.id, spec=spec, total_generations=total).id
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from legcore.runner import prepare
+from services.store import api_keys
 from services.store import repository as repo
 from services.store.evaluations import (
     EvaluationsIn,
@@ -34,7 +35,7 @@ SPEC: dict[str, Any] = {
 
 def _job(spec: dict[str, Any]) -> str:
     with session_scope() as s:
-        key = repo.create_api_key(s, name="t", key_hash=generate_api_key()[1])
+        key = api_keys.create_api_key(s, name="t", key_hash=generate_api_key()[1])
         total = spec["budget"]["generations"]
         return repo.create_job(s, owner_key_id=key.id, spec=spec, total_generations=total).id
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from services.store import api_keys
 from services.store import output_queries as oq
 from services.store import repository as repo
 from services.store.artifacts import ArtifactStore
@@ -23,7 +24,7 @@ from tests.gait_specs import GAIT, UNSTABLE
 def _run(spec: dict[str, Any], settings: Settings) -> tuple[Any, dict[str, Any], Any]:
     """Run ``spec`` to its end: the job row, its result.json and its stored result."""
     with session_scope() as s:
-        key = repo.create_api_key(s, name="t", key_hash=generate_api_key()[1])
+        key = api_keys.create_api_key(s, name="t", key_hash=generate_api_key()[1])
         job_id = repo.create_job(s, owner_key_id=key.id, spec=spec, total_generations=2).id
     assert execute.execute_job(job_id, settings, wid="w1").status == "succeeded"
     with session_scope() as s:
