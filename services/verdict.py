@@ -38,7 +38,7 @@ class Verdict:
 
 
 def _number(v: float) -> str:
-    """4 significant digits (as ``services.cli.display.fmt``)."""
+    """4 significant digits (as ``services.cli.result_view.fmt``)."""
     if not math.isfinite(v):
         return "—"
     return "0" if v == 0 else f"{v:.4g}"

@@ -23,13 +23,9 @@ from services.cli.common import (
     load_spec_file,
     resolve_id,
 )
-from services.cli.display import (
-    ResultView,
-    best_text,
-    full_tables,
-    objective_names_of,
-    summary_block,
-)
+from services.cli.display import full_tables, summary_block
+from services.cli.objectives import best_text, objective_names_of
+from services.cli.result_view import ResultView
 from services.cli.views import job_block, job_title, jobs_table, short, sweep_table
 
 __all__ = ["follow", "print_job_result", "short", "sweep_cancelled_text"]

@@ -26,7 +26,9 @@ from services.cli.common import (
     load_spec_file,
     validation_lines,
 )
-from services.cli.display import ResultView, best_text, full_tables, summary_block
+from services.cli.display import full_tables, summary_block
+from services.cli.objectives import best_text
+from services.cli.result_view import ResultView
 
 __all__ = ["print_result"]
 

@@ -10,7 +10,8 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from services.cli.display import best_text, fmt, objective_names_of
+from services.cli.objectives import best_text, objective_names_of
+from services.cli.result_view import fmt
 from services.verdict import violations_text
 
 __all__ = [

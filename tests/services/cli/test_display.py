@@ -16,7 +16,9 @@ from legcore.studies.metric_names import (
     joint_row_name,
     metric_name,
 )
-from services.cli.display import ResultView, best_text, fmt, full_tables, summary_block
+from services.cli.display import full_tables, summary_block
+from services.cli.objectives import best_text
+from services.cli.result_view import ResultView, fmt
 from services.paper_numbers import paper_entry
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -248,13 +250,13 @@ def test_paper_numbers_only_on_the_papers_robot() -> None:
 
 
 def test_status_marks_an_infeasible_job_in_red(monkeypatch: pytest.MonkeyPatch) -> None:
-    from services.cli import display
+    from services.cli import objectives
     from services.cli.views import job_block, jobs_table, status_text
 
     def never(_spec: object) -> None:
         raise AssertionError("the objective names come from the job's stored facts")
 
-    monkeypatch.setattr(display, "objective_names_for", never)
+    monkeypatch.setattr(objectives, "objective_names_for", never)
     facts = {"kind": "quadruped_gait", "robot": "calderon_quadruped", "optimizer": "ga",
              "objectives": ["energy_per_metre"], "n_var": 3}  # fmt: skip
     job = {"id": "2253abcd-0000", "kind": "quadruped_gait", "status": "succeeded",
