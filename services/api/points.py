@@ -1,5 +1,5 @@
 """Front points made on demand by the API: a point's decoded motion and its Rerun recording,
-a baseline's recording, and the metrics of every point of a front.
+and a baseline's recording (the metrics of a front's points: :mod:`services.api.front_metrics`).
 
 Where the work runs — the API, in-process, not a worker: decoding one point is one trajectory
 evaluation of a problem whose size was checked at submission (``LEGOPT_MAX_*``), and its
@@ -25,7 +25,6 @@ again; an artifact store that cannot be reached leaves the metrics ``unavailable
 
 from __future__ import annotations
 
-import json
 import tempfile
 import threading
 from collections import OrderedDict
@@ -40,7 +39,6 @@ from services.api.bounded_work import BoundedWork
 from services.api.deps import ApiContext
 from services.store import output_queries as oq
 from services.store import repository as repo
-from services.store.errors import ArtifactError, ArtifactMissingError, ChecksumMismatchError
 from services.store.records import ArtifactRecord, JobRecord
 from services.store.states import JobStatus
 
@@ -63,17 +61,17 @@ def point_kind(k: int) -> str:
     return f"point-{k}"
 
 
-def _run(key: tuple[str, str], work: Callable[[], T]) -> T:
+def run_point_work(key: tuple[str, str], work: Callable[[], T]) -> T:
     """Run ``work`` on the process's point thread (shared by identical concurrent requests);
     503 with Retry-After when it takes longer than ``WAIT_S``."""
     return _work.run(key, work, f"{key[1]} of job {key[0]}")
 
 
-def _point_error(exc: Exception) -> HTTPException:
+def point_conflict(exc: Exception) -> HTTPException:
     return HTTPException(status.HTTP_409_CONFLICT, str(exc))
 
 
-def _attempt_dir(ctx: ApiContext, job_id: str) -> str | None:
+def attempt_dir(ctx: ApiContext, job_id: str) -> str | None:
     """The attempt directory of the job's stored result (``<job>/<attempt>/result.json``)."""
     with ctx.read() as session:
         art = oq.get_artifact(session, job_id, "result")
@@ -226,9 +224,9 @@ def _solution_recording(
         try:
             decoded = decode(spec)
         except PointError as exc:
-            raise _point_error(exc) from None
+            raise point_conflict(exc) from None
         store = ctx.artifacts
-        attempt = _attempt_dir(ctx, job.id)
+        attempt = attempt_dir(ctx, job.id)
         with tempfile.TemporaryDirectory(prefix="legopt-point-") as tmp:
             path = Path(tmp) / f"{kind}.rrd"
             write_point_recording(
@@ -247,105 +245,7 @@ def _solution_recording(
         assert record is not None
         return record
 
-    return _run((job.id, kind), make)
-
-
-FRONT_METRICS = "front-metrics"
-
-
-def _metric_values(metrics: Any) -> dict[str, float | None]:
-    """A solution's numeric metrics (flags as 0/1), non-finite values as None."""
-    out: dict[str, float | None] = {}
-    for k, v in (metrics or {}).items():
-        if isinstance(v, int | float):
-            f = float(v)
-            out[str(k)] = f if np.isfinite(f) else None
-    return out
-
-
-def _read_front_metrics(
-    ctx: ApiContext, art: ArtifactRecord | None
-) -> dict[int, dict[str, Any] | None] | None:
-    """The stored front metrics; None when there are none, or their file or object is gone
-    or corrupted (its row is then removed: they are made again)."""
-    if art is None:
-        return None
-    try:
-        doc = json.loads(ctx.artifacts.read(art.relative_path, art.sha256))
-    except (ArtifactMissingError, ChecksumMismatchError):
-        with ctx.write() as session:
-            oq.forget_artifact(session, art.job_id, art.kind, art.sha256)
-        return None
-    return {int(k): v for k, v in (doc.get("points") or {}).items()}
-
-
-def front_metrics(ctx: ApiContext, job: JobRecord) -> dict[int, dict[str, Any] | None]:
-    """``{point index: its metrics}`` of every point of a succeeded job's front (None for a
-    point that cannot be decoded), decoded from the points' stored decision vectors the first
-    time (one problem built, then milliseconds per point) and kept as the job's artifact
-    ``front-metrics`` (JSON). 409 when the job's spec cannot be prepared again, 503 while
-    they are being computed (longer than ``WAIT_S``)."""
-    with ctx.read() as session:
-        existing = oq.get_artifact(session, job.id, FRONT_METRICS)
-    stored = _read_front_metrics(ctx, existing)
-    if stored is not None:
-        return stored
-
-    def make() -> dict[int, dict[str, Any] | None]:
-        from services.recording.point import PointError, decode_point, prepare_cached
-
-        with ctx.read() as session:
-            done = oq.get_artifact(session, job.id, FRONT_METRICS)
-        again = _read_front_metrics(ctx, done)
-        if again is not None:
-            return again
-        with ctx.read() as session:
-            spec = repo.job_spec(session, job)
-            points = oq.list_pareto(session, job.id)
-        if not points:
-            return {}
-        try:
-            prepare_cached(spec)
-        except ValueError as exc:
-            raise _point_error(
-                PointError(f"the job's spec cannot be prepared again: {exc}")
-            ) from None
-        values: dict[int, dict[str, Any] | None] = {}
-        for p in points:
-            try:
-                values[p.index] = _metric_values(decode_point(spec, p.x or []).solution.metrics)
-            except PointError:
-                values[p.index] = None
-        doc = {"points": {str(k): v for k, v in values.items()}}
-        data = json.dumps(doc, allow_nan=False, separators=(",", ":")).encode()
-        stored = ctx.artifacts.put(
-            job.id, FRONT_METRICS, data, suffix=".json", attempt=_attempt_dir(ctx, job.id)
-        )
-        with ctx.write() as session:  # a concurrent copy (another API process) is identical
-            oq.add_artifact(session, job.id, FRONT_METRICS, *stored)
-        return values
-
-    return _run((job.id, FRONT_METRICS), make)
-
-
-def point_metrics(
-    ctx: ApiContext, job: JobRecord, any_points: bool
-) -> tuple[dict[int, dict[str, Any] | None], str, str | None]:
-    """``(metrics by point index, state, note)`` of a job's front (``FrontOut.point_metrics``):
-    computed once and cached (:func:`front_metrics`); pending when that takes
-    longer than a request waits, unavailable when the spec cannot be decoded again."""
-    if not any_points or job.status is not JobStatus.SUCCEEDED:
-        return {}, "ready", None
-    try:
-        return front_metrics(ctx, job), "ready", None
-    except ArtifactError as exc:  # the store cannot be reached: the rest of the page can
-        return {}, "unavailable", f"the points' metrics cannot be read now: {exc}"
-    except HTTPException as exc:
-        if exc.status_code == status.HTTP_503_SERVICE_UNAVAILABLE:
-            return {}, "pending", "the points' metrics are being computed: ask again shortly"
-        if exc.status_code == status.HTTP_409_CONFLICT:
-            return {}, "unavailable", str(exc.detail)
-        raise
+    return run_point_work((job.id, kind), make)
 
 
 def point_motion(
@@ -397,7 +297,7 @@ def point_motion(
                 x = stored.x if stored is not None else trial_vector or result.best_x
                 decoded = decode_point(spec, x or [])
         except PointError as exc:
-            raise _point_error(exc) from None
+            raise point_conflict(exc) from None
         sol = decoded.solution
         return {
             "job_id": job.id,
@@ -414,7 +314,7 @@ def point_motion(
             **motion_payload(sol.motion),
         }
 
-    payload = _run(key, make)
+    payload = run_point_work(key, make)
     with _lock:
         _motions[key] = payload
         while len(_motions) > MOTION_CACHE_SIZE:
@@ -423,13 +323,13 @@ def point_motion(
 
 
 __all__ = [
-    "FRONT_METRICS",
     "WAIT_S",
+    "attempt_dir",
     "baseline_kind",
     "baseline_recording",
-    "front_metrics",
+    "point_conflict",
     "point_kind",
-    "point_metrics",
     "point_motion",
     "point_recording",
+    "run_point_work",
 ]

@@ -17,9 +17,9 @@ from services.api.deps import ApiContext, Context, CurrentKey
 from services.api.errors import VALIDATION_ERROR_SCHEMA, invalid
 from services.api.export_formats import MEDIA_TYPES, ExportFormat, Units, encode, filename
 from services.api.export_tables import quantities, sweep_job_table, unit_of
+from services.api.front_metrics import point_metrics
 from services.api.job_export_tables import front_table, history_table
 from services.api.lookups import Filters, cell_table, owned_job, study_kind, sync_labels
-from services.api.points import point_metrics
 from services.api.schemas import ErrorOut, objective_names
 from services.api.sweep_cells import mean_sd
 from services.store import dashboard_queries as dq

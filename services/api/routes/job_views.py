@@ -14,14 +14,10 @@ from fastapi.responses import FileResponse
 from services.api.artifact_download import artifact_response
 from services.api.dashboard_schemas import FrontOut, MotionOut
 from services.api.deps import ApiContext, Context, CurrentKey
+from services.api.front_metrics import point_metrics
 from services.api.front_view import front_out
 from services.api.lookups import OwnedJob, owned_job, path_index
-from services.api.points import (
-    baseline_recording,
-    point_metrics,
-    point_motion,
-    point_recording,
-)
+from services.api.points import baseline_recording, point_motion, point_recording
 from services.api.schemas import ErrorOut
 from services.store import output_queries as oq
 from services.store import repository as repo
