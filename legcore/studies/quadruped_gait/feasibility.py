@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from legcore.studies.quadruped_gait.contract import GaitProblem
 from legcore.studies.task import Violation
 
 __all__ = ["StepReport", "step_report"]
@@ -100,12 +101,12 @@ def _peak(values: Any, limits: Any, names: tuple[str, ...]) -> tuple[float, str,
     return float(ratio[j]), names[j], float(peak[j]), float(limits[j])
 
 
-def step_report(problem: Any, x: Any) -> StepReport:
+def step_report(problem: GaitProblem, x: Any) -> StepReport:
     """Walk one cycle of step ``x`` (3,) with ``problem`` (a ``QuadrupedGaitProblem``) and
     report it against every limit."""
     x = np.asarray(x, dtype=float).reshape(1, 3)
     r = problem.simulate(x, detail=True)
-    _, G = problem._objective_constraints(r)
+    _, G = problem.objective_constraints(r)
     qd_max = np.concatenate([leg.robot.qd_max for leg in problem.legs])
     tau_max = np.concatenate([leg.robot.tau_max for leg in problem.legs])
     qd = _peak(r["qd"][0], qd_max, problem.joint_names)

@@ -75,9 +75,9 @@ from legcore.chain_points import chain_points
 from legcore.dynamics import inverse_dynamics
 from legcore.energy import integrate
 from legcore.gaits import QUADRUPED_WALK, Gait, leg_phase
-from legcore.joint_metrics import joint_metrics
 from legcore.robots.catalog.animatronic_quadruped import TABLE2
 from legcore.robots.legged import LeggedRobot
+from legcore.studies.quadruped_gait import decode
 from legcore.studies.quadruped_gait.cycle import (
     SwingShape,
     foot_cycle,
@@ -93,8 +93,8 @@ from legcore.studies.quadruped_gait.tables import (
     table2,
     table2_comparison,
 )
-from legcore.studies.study import Motion, Solution, StudyProblem, Violation
-from legcore.support_polygon import stability_margin, support_polygon
+from legcore.studies.study import Solution, StudyProblem, Violation
+from legcore.support_polygon import stability_margin
 
 __all__ = ["Params", "QuadrupedGaitProblem", "TABLE2_PAPER", "UNREACHABLE_F"]
 
@@ -116,8 +116,8 @@ class QuadrupedGaitProblem(StudyProblem):
     """Energy of the 4-beat walk per metre (or per cycle) over ``x = (s, h, β)``; see the module
     docstring for the model and the constraint columns."""
 
-    constraint_names = ("stability_margin_mm", "unreachable_fraction", "joint_speed", "torque",
-                        "foot_pull")
+    constraint_names: tuple[str, ...] = (
+        "stability_margin_mm", "unreachable_fraction", "joint_speed", "torque", "foot_pull")
 
     def __init__(self, robot: LeggedRobot, params: Params) -> None:
         self.robot = robot
@@ -274,7 +274,8 @@ class QuadrupedGaitProblem(StudyProblem):
             )
         return out
 
-    def _objective_constraints(self, r: dict[str, Any]) -> tuple[FloatArray, FloatArray]:
+    def objective_constraints(self, r: dict[str, Any]) -> tuple[FloatArray, FloatArray]:
+        """(F (B, 1), G (B, 5)) of a simulation (:meth:`simulate`)."""
         p = self.params
         f = r["E"] / r["D"] if p.objective == "energy_per_metre" else r["E"].copy()
         f = np.where((r["bad"] > 0) | ~np.isfinite(f), UNREACHABLE_F, f)
@@ -292,7 +293,7 @@ class QuadrupedGaitProblem(StudyProblem):
         return f[:, None], G
 
     def _evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self._objective_constraints(self.simulate(X))
+        return self.objective_constraints(self.simulate(X))
 
     def violations(self, x: FloatArray) -> tuple[Violation, ...]:
         """What step ``x`` violates, in words with sizes and units (margin in mm, the joint
@@ -302,134 +303,10 @@ class QuadrupedGaitProblem(StudyProblem):
 
     # ------------------------------------------------------------------ decoding
     def solution(self, x: FloatArray) -> Solution:
-        x = np.asarray(x, dtype=float).reshape(-1)
-        if x.shape != (3,) or not np.all(np.isfinite(x)):
-            raise ValueError(
-                f"x: expected 3 finite numbers (step_length, step_height, duty), got {x}"
-            )
-        r = self.simulate(x[None, :], detail=True)
-        F, G = self._objective_constraints(r)
-        d = {k: (v[0] if isinstance(v, np.ndarray) and v.ndim >= 1 else v) for k, v in r.items()}
-        t, q, qd, qdd, tau = d["t"], d["q"], d["qd"], d["qdd"], d["tau"]
-        p = self.params
-        power = tau * qd
-        absp = np.maximum(power, 0.0) if p.energy_model == "positive_work" else np.abs(power)
-        cum = np.concatenate(([0.0], np.cumsum(0.5 * (absp[1:] + absp[:-1]).sum(-1) * np.diff(t))))
-        x_body = self.speed * t  # body displacement (m) along world x
-        body_h = self.depth - float(np.mean([leg.hip[2, 3] for leg in self.legs]))
-        body = np.stack((x_body, np.zeros_like(t), np.full_like(t, body_h)), -1)
-        feet_w = d["feet"] + body[:, None, :]
-        com_w = d["com"] + body
-        tool_leg = self.roles.index("FR")
-        # seed 000 metrics per joint; D = the FR foot's path relative to the body over a cycle
-        jerk = _periodic_jerk(t, qdd)
-        jm = joint_metrics(t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=d["feet"][:, tool_leg])
-        reachable = bool(np.all(d["reachable"]))
-        feasible = bool(np.all(G <= 0.0))
-        E, D = float(d["E"]), float(d["D"])
-        E_joint = d["E_joint"]
-        n_j = list(self.n_joints)
-        starts = np.cumsum([0, *n_j])
-        sup = d["support"]
-        swing_mask = ~np.repeat(sup, n_j, axis=-1)
-        e_swing = float(integrate((absp * swing_mask)[:, :], t).sum())
-        metrics: dict[str, float] = {
-            "energy_per_cycle_J": E,
-            "energy_per_metre_J_per_m": E / D if D > 0 else float("nan"),
-            "energy_swing_J": e_swing,
-            "energy_stance_J": E - e_swing,
-            "cycle_time_s": float(d["T"]),
-            "distance_per_cycle_m": D,
-            "speed_m_s": self.speed,
-            "step_length_m": float(x[0]),
-            "step_height_m": float(x[1]),
-            "duty": float(x[2]),
-            "min_stability_margin_m": float(d["margin"]),
-            # no foot on the ground at some sample: the margin is -inf, stored as null + this flag
-            "airborne": float(not np.isfinite(d["margin"])),
-            "required_stability_margin_m": self.required_margin,
-            "max_joint_speed_ratio": float(d["qd_ratio"]),
-            "max_torque_ratio": float(d["tau_ratio"]),
-            "max_torque_Nm": float(np.max(np.abs(tau))),
-            "max_joint_speed_rad_s": float(np.max(np.abs(qd))),
-            "max_foot_load_N": float(np.max(d["loads"])),
-            "min_foot_load_N": float(np.min(d["loads"])),
-            "reachable": float(reachable),
-            "feasible": float(feasible),
-        }
-        for j, name in enumerate(self.leg_names):
-            metrics[f"energy_{name}_J"] = float(E_joint[starts[j] : starts[j + 1]].sum())
-        table = [
-            {
-                "metric": row.label,
-                "key": row.key,
-                "unit": row.unit,
-                **(
-                    {"values": list(row.per_joint)}
-                    if row.per_joint is not None
-                    else {"total": row.total}
-                ),
-            }
-            for row in jm.as_table()
-        ]
-        polys, n_poly = support_polygon(feet_w, sup)
-        scene: dict[str, Any] = {
-            "frame": "world: x along the walk, z up; ground at z = 0",
-            "ground_z": 0.0,
-            "feet": feet_w,
-            "foot_names": self.leg_names,
-            "support": sup,
-            "support_polygon": np.concatenate((polys, np.zeros(polys.shape[:-1] + (1,))), -1),
-            "support_polygon_n": n_poly,
-            "com": com_w,
-            "com_ground": com_w * np.array([1.0, 1.0, 0.0]),
-            "body_position": body,
-            "body_size": self.robot.body_size,
-            "stability_margin": d["margin_t"],
-            "foot_loads_N": d["loads"],
-        }
-        motion = Motion(
-            t=t,
-            q=q,
-            joint_names=self.joint_names,
-            qd=qd,
-            qdd=qdd,
-            jerk=jerk,
-            tau=tau,
-            power=power,
-            energy=cum,
-            tool=feet_w[:, tool_leg],
-            robot=self.robot.name,
-            legs=self.leg_names,
-            scene=scene,
-        )
-        extra = {
-            "objective": p.objective,
-            "constraints": dict(zip(self.constraint_names, (float(g) for g in G[0]), strict=True)),
-            "gait": {
-                "name": self.gait.name,
-                "legs": list(self.gait.legs),
-                "offsets": list(self.gait.offsets),
-                "duty": float(x[2]),
-                "lift_off_order": [
-                    n for _, n in sorted(zip(self.gait.offsets, self.gait.legs, strict=True))
-                ],
-                "source": self.gait.source,
-            },
-            "table_columns": list(self.joint_names),
-            "servo_table": self.servo_table(t, q),
-            "table2": self.table2(float(x[0])),
-            "ik": {g.name: ("closed form leg2" if g.closed_form and not self.numeric
-                            else "numerical (legcore.ik.solve)") for g in self.gait_legs},
-        }
-        return Solution(
-            x=x.copy(),
-            objectives={p.objective: float(F[0, 0])},
-            metrics=metrics,
-            table=table,
-            motion=motion,
-            extra=extra,
-        )
+        """One step ``x`` = (step_length m, step_height m, duty) decoded: the cycle's motion on
+        the walking body, energy and margin metrics, the per-joint table, servo and Table 2
+        layouts (:func:`legcore.studies.quadruped_gait.decode.solution`)."""
+        return decode.solution(self, x)
 
     def servo_table(self, t: FloatArray, q: FloatArray) -> dict[str, Any]:
         """Servo commands (deg) per time step and servo over one cycle (see
@@ -461,15 +338,6 @@ class QuadrupedGaitProblem(StudyProblem):
                 out["table2_paper"] = cmp
         return out
 
-
-
-def _periodic_jerk(t: FloatArray, qdd: FloatArray) -> FloatArray:
-    """Jerk (K, n) rad/s³ by differentiating ``qdd`` on the closed cycle grid (periodic central
-    differences; the cycle is C², so the jerk is piecewise continuous)."""
-    dt = t[1] - t[0]
-    core = qdd[:-1]
-    j = (np.roll(core, -1, axis=0) - np.roll(core, 1, axis=0)) / (2.0 * dt)
-    return np.concatenate((j, j[:1]), 0)
 
 
 def _foot_jacobian(rb: Any, q: FloatArray) -> FloatArray:
