@@ -62,15 +62,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from legcore.metrics import hypervolume
+from legcore.studies.hexapod_workspace import report
 from legcore.studies.hexapod_workspace.defaults import study_robot
 from legcore.studies.hexapod_workspace.geometry import (
-    OTHER_STANCE,
+    PoseWorkspace,
     Tripod,
     body_pose_ik,
     fit_body_motion,
     is_mirror_symmetric,
-    mirror_front_back,
     mirror_left_right,
     pose_workspace,
     tripod_from_robot,
@@ -375,104 +374,22 @@ class HexapodWorkspaceProblem(StudyProblem):
         return {"theta1": X, "F": F, "S": S, "stable": stable, "pose": pose, "slip": slip,
                 "exact_reachable": ok.all(axis=-1), "q_exact": q}
 
-    def pose_workspace(self) -> Any:
+    def pose_workspace(self) -> PoseWorkspace:
         """The exact body-pose workspace on the ``Params`` grid (see geometry module)."""
         x, y, yaw = self.params.pose_grid()
         return pose_workspace(self.tripod, self.feet_start, x, y, yaw, knee=self.params.knee,
                               q_ref=self.q_stance)
 
     def extras(self, front_X: FloatArray, front_F: FloatArray) -> dict[str, Any]:
-        p = self.params
-        X = np.asarray(front_X, dtype=float).reshape(-1, 3)
-        k = X.shape[0]
-        rep = self.front_report(X) if k else None
-        out: dict[str, Any] = {
-            "legs": list(self.tripod.legs),
-            "units": {"theta1": "rad", "f1_beta1": "rad", "f2_beta5": "rad",
-                      "f3_perimeter": "m", "pose": "(m, m, rad)", "S": "m"},
-            "stance_t": {
-                "theta1": self.theta_start.tolist(), "theta2": self.theta2,
-                "theta3": self.theta3, "feet": self.feet_start.tolist(),
-                "beta1": self.beta1_0, "beta5": self.beta5_0, "perimeter": self.perimeter_0,
-                "S_f": float(self.S_start[0]), "S_b": float(self.S_start[1]),
-            },
-        }
-        if rep is None:
-            out["front"] = {"n": 0}
-            out["stability_split"] = {"mode": p.stability, "n_front": 0, "n_stable": 0,
-                                      "n_unstable": 0}
-        else:
-            stable = rep["stable"]
-            out["front"] = {
-                "n": k,
-                "theta1": X.tolist(),
-                "F": rep["F"].tolist(),
-                "S_f": rep["S"][:, 0].tolist(),
-                "S_b": rep["S"][:, 1].tolist(),
-                "stable": stable.tolist(),
-                "body_pose": rep["pose"].tolist(),
-                "foot_slip_max": rep["slip"].max(axis=1).tolist(),
-                "exact_reachable": rep["exact_reachable"].tolist(),
-            }
-            out["stability_split"] = {
-                "mode": p.stability,
-                "n_front": k,
-                "n_stable": int(stable.sum()),
-                "n_unstable": int((~stable).sum()),
-                "fraction_stable": float(stable.mean()),
-                "unstable_index": np.flatnonzero(~stable).tolist(),
-            }
-            out["workspace"] = self.mirrored_workspace(X, rep)
-            ref = np.asarray(p.hv_ref(), dtype=float)
-            hv = hypervolume(np.asarray(front_F, dtype=float).reshape(-1, 3), ref)
-            out["hypervolume"] = {"value": hv.value, "ref_point": list(hv.ref_point),
-                                  "normalised": hv.value / float(np.prod(ref)),
-                                  "n_points": hv.n_points}
-        ws = self.pose_workspace()
-        out["pose_workspace"] = ws.summary()
-        if rep is not None:
-            out["pose_workspace"]["front_poses_reachable"] = int(rep["exact_reachable"].sum())
-        return out
+        """The stance at t, the front with its stability split, Fig. 8's workspaces, the
+        hypervolume and the exact pose workspace
+        (:func:`legcore.studies.hexapod_workspace.report.extras`)."""
+        return report.extras(self, front_X, front_F)
 
     def mirrored_workspace(self, X: FloatArray, rep: dict[str, Any] | None = None
                            ) -> dict[str, Any]:
-        """Fig. 8a (the front's body displacements) and Fig. 8b (with the mirrored solutions).
-
-        ``front``: body poses (k, 3) and body-frame feet at t+1 (k, 3, 2) of the front (the
-        paper's Matlab plots move the feet, not the body); ``mirrored``: the front/back mirror
-        (same tripod, opposite walking direction), re-evaluated; ``full``: both; ``other_tripod``:
-        the left/right mirror — the same front for the other tripod (identical objectives).
-        """
-        rep = rep or self.front_report(X)
-        out: dict[str, Any] = {"front": {"theta1": X.tolist(), "body_pose": rep["pose"].tolist(),
-                                         "feet_xy": self.feet(X)[..., :2].tolist(),
-                                         "stable": rep["stable"].tolist()}}
-        if not self.symmetry["front_back"]:
-            out["mirrored"] = None
-            out["note"] = "robot hips are not front/back symmetric: no mirrored workspace"
-            return out
-        Xm = mirror_front_back(X)
-        rm = self.front_report(Xm)
-        out["mirrored"] = {"theta1": Xm.tolist(), "body_pose": rm["pose"].tolist(),
-                           "feet_xy": self.feet(Xm)[..., :2].tolist(),
-                           "F": rm["F"].tolist(), "stable": rm["stable"].tolist()}
-        full_pose = np.vstack((rep["pose"], rm["pose"]))
-        full_stable = np.concatenate((rep["stable"], rm["stable"]))
-        out["full"] = {
-            "body_pose": full_pose.tolist(),
-            "stable": full_stable.tolist(),
-            "x_range": [float(full_pose[:, 0].min()), float(full_pose[:, 0].max())],
-            "y_range": [float(full_pose[:, 1].min()), float(full_pose[:, 1].max())],
-            "yaw_range": [float(full_pose[:, 2].min()), float(full_pose[:, 2].max())],
-        }
-        if self.symmetry["left_right"]:
-            other = OTHER_STANCE[self.params.stance]
-            out["other_tripod"] = {
-                "legs": list(self.stance_legs[other]),
-                "theta1": mirror_left_right(X).tolist(),
-                "body_pose": (rep["pose"] * np.array([-1.0, 1.0, -1.0])).tolist(),
-            }
-        return out
+        """Fig. 8a and 8b (:func:`legcore.studies.hexapod_workspace.report.mirrored_workspace`)."""
+        return report.mirrored_workspace(self, X, rep)
 
 
 def _json_list(a: FloatArray) -> Any:
