@@ -8,6 +8,7 @@ call. Both produce the same :class:`RunResult` for the same spec and seed.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -30,6 +31,7 @@ __all__ = [
     "Prepared",
     "RunResult",
     "finalize",
+    "job_shape",
     "job_size",
     "prepare",
     "resolve_robot",
@@ -139,9 +141,9 @@ class JobSize:
         return self.population * self.generations * self.samples
 
 
-def job_size(prepared: Prepared) -> JobSize:
-    """Estimate the size of a prepared job (for the service's per-job limits), with its
-    predicted peak memory (:func:`legcore.memory.predicted_peak_bytes`)."""
+def job_shape(prepared: Prepared) -> tuple[int, int]:
+    """(population per generation, generations) of a prepared job — what :func:`job_size`
+    reports without measuring the memory."""
     params = prepared.algorithm.params
     population = next(
         (int(params[k]) for k in ("pop_size", "n_samples", "n_subproblems") if k in params), 1
@@ -150,9 +152,17 @@ def job_size(prepared: Prepared) -> JobSize:
     if generations is None:
         evals = prepared.spec.budget.evaluations
         generations = -(-evals // population) if evals else prepared.study.default_generations
+    return population, int(generations)
+
+
+def job_size(prepared: Prepared) -> JobSize:
+    """Estimate the size of a prepared job (for the service's per-job limits), with its
+    predicted peak memory (:func:`legcore.memory.predicted_peak_bytes`: measured on a few
+    evaluations, milliseconds)."""
     from legcore.memory import predicted_peak_bytes
 
-    return JobSize(population, int(generations), max(1, int(prepared.problem.n_samples)),
+    population, generations = job_shape(prepared)
+    return JobSize(population, generations, max(1, int(prepared.problem.n_samples)),
                    predicted_peak_bytes(prepared.problem, population))
 
 
@@ -297,6 +307,11 @@ def run(
 
 def _jsonable(obj: Any) -> Any:
     """Strict-JSON-safe copy: numpy → python, NaN/inf → None, tuples → lists."""
+    kind = type(obj)
+    if kind is str or kind is int or kind is bool or obj is None:
+        return obj
+    if kind is float:
+        return obj if obj - obj == 0.0 else None
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
@@ -310,5 +325,5 @@ def _jsonable(obj: Any) -> Any:
     if isinstance(obj, np.generic):
         return _jsonable(obj.item())
     if isinstance(obj, float):
-        return obj if np.isfinite(obj) else None
+        return obj if math.isfinite(obj) else None
     return obj

@@ -22,7 +22,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from services.store.front_codec import decode_front_array, encode_front
-from services.store.sql import insert_ignoring_duplicates
+from services.store.sql import insert_many_ignoring_duplicates
 from services.store.tables import EVALUATIONS
 
 #: At most this many evaluated solutions are stored per job (about 20,000 × (n_var + n_obj + 1)
@@ -81,27 +81,24 @@ def keeps_generation(generation: int, stride: int, last: bool) -> bool:
 
 
 def record_evaluations(session: Session, job_id: str, batches: Sequence[EvaluationsIn]) -> None:
-    """Insert the generations' evaluated solutions (already-stored generations are skipped).
-    Call in the transaction whose ``record_generations`` checked the lease."""
+    """Insert the generations' evaluated solutions in one statement (already-stored generations
+    are skipped). Call in the transaction whose ``record_generations`` checked the lease."""
+    rows = []
     for b in batches:
         X = np.atleast_2d(np.asarray(b.X, dtype=float))
-        F = np.atleast_2d(np.asarray(b.F, dtype=float))
-        cv = np.asarray(b.cv, dtype=float).reshape(-1, 1)
         if X.shape[0] == 0:
             continue
-        insert_ignoring_duplicates(
-            session,
-            EVALUATIONS,
-            {
-                "job_id": job_id,
-                "generation": int(b.generation),
-                "n": int(X.shape[0]),
-                "x_packed": encode_front(X),
-                "f_packed": encode_front(F),
-                "cv_packed": encode_front(cv),
-            },
-            ("job_id", "generation"),
-        )
+        F = np.atleast_2d(np.asarray(b.F, dtype=float))
+        cv = np.asarray(b.cv, dtype=float).reshape(-1, 1)
+        rows.append({
+            "job_id": job_id,
+            "generation": int(b.generation),
+            "n": int(X.shape[0]),
+            "x_packed": encode_front(X),
+            "f_packed": encode_front(F),
+            "cv_packed": encode_front(cv),
+        })
+    insert_many_ignoring_duplicates(session, EVALUATIONS, rows, ("job_id", "generation"))
 
 
 def load_evaluations(session: Session, job_id: str) -> Evaluations | None:

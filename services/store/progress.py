@@ -15,14 +15,19 @@ from datetime import datetime
 from typing import Any
 
 from sqlalchemy import select, update
-from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
 from services.store.errors import LeaseLostError
 from services.store.front_codec import encode_front
 from services.store.leases import _owned_by, _require_owner
 from services.store.records import CheckpointRecord, GenerationIn
-from services.store.sql import fetch_one, insert_ignoring_duplicates, now_utc, rowcount
+from services.store.sql import (
+    fetch_one,
+    insert_ignoring_duplicates,
+    insert_many_ignoring_duplicates,
+    now_utc,
+    rowcount,
+)
 from services.store.tables import CHECKPOINTS, GENERATIONS, JOBS
 
 
@@ -141,16 +146,7 @@ def record_generations(
         if flag is None:
             raise LeaseLostError(f"worker {worker_id!r} does not hold the lease of job {job_id}")
     values = [_generation_row(job_id, g, now) for g in rows]
-    dialect = session.get_bind().dialect.name
-    if values and dialect in ("sqlite", "postgresql"):
-        module = sqlite if dialect == "sqlite" else postgresql
-        stmt = module.insert(GENERATIONS).on_conflict_do_nothing(
-            index_elements=["job_id", "generation"]
-        )
-        session.execute(stmt, values)
-    else:
-        for v in values:
-            insert_ignoring_duplicates(session, GENERATIONS, v, ("job_id", "generation"))
+    insert_many_ignoring_duplicates(session, GENERATIONS, values, ("job_id", "generation"))
     return bool(flag[0])
 
 

@@ -123,12 +123,31 @@ def insert_ignoring_duplicates(
     return True
 
 
+def insert_many_ignoring_duplicates(
+    session: Session, table: Table, rows: Sequence[dict[str, Any]], keys: Sequence[str]
+) -> None:
+    """INSERT ``rows`` in one statement (``ON CONFLICT DO NOTHING``: a row whose ``keys``
+    exist is skipped) — one round trip for a batch instead of one per row; other dialects
+    insert them one by one (:func:`insert_ignoring_duplicates`)."""
+    if not rows:
+        return
+    dialect = session.get_bind().dialect.name
+    if dialect in ("sqlite", "postgresql"):
+        module = sqlite if dialect == "sqlite" else postgresql
+        stmt = module.insert(table).on_conflict_do_nothing(index_elements=list(keys))
+        session.execute(stmt, list(rows))
+        return
+    for row in rows:
+        insert_ignoring_duplicates(session, table, row, keys)
+
+
 __all__ = [
     "MAX_PAGE_SIZE",
     "fetch_all",
     "fetch_one",
     "fetch_page",
     "insert_ignoring_duplicates",
+    "insert_many_ignoring_duplicates",
     "insert_or_conflict",
     "now_utc",
     "rowcount",

@@ -62,6 +62,8 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, Mapping):
         return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
+        if all(type(v) is float and v - v == 0.0 for v in value):  # finite floats: as they are
+            return list(value)
         return [json_safe(v) for v in value]
     tolist = getattr(value, "tolist", None)  # numpy arrays and scalars, without importing numpy
     if callable(tolist):

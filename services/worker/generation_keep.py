@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from legcore.runner import job_size
+from legcore.runner import job_shape
 from services.store.evaluations import (
     MAX_STORED_EVALUATIONS,
     EvaluationsIn,
@@ -27,8 +27,7 @@ class TrialKeeper:
     the last generation's."""
 
     def __init__(self, prepared: Any) -> None:
-        size = job_size(prepared)
-        self.stride = evaluation_stride(size.population, size.generations)
+        self.stride = evaluation_stride(*job_shape(prepared))
         self.kept = 0
         self.pending: list[EvaluationsIn] = []
 
