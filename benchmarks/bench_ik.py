@@ -32,8 +32,8 @@ import argparse
 import math
 import os
 import platform
+import sys
 import time
-import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -66,21 +66,14 @@ def _interleaved(fns: list[Callable[[], Any]], repeat: int) -> list[tuple[float,
 
 def erd_urdf_robot(subpath: str, name: str, tool_frame: str | None) -> Robot | None:
     """A robot from an example-robot-data URDF (finger joints locked), None if not installed."""
-    import importlib.metadata
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests package
+    from tests.robot_files import erd_arm_spec, erd_robots_dir
 
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
+    root_dir = erd_robots_dir()
+    if root_dir is None:
         return None
-    root_dir = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
-    text = (root_dir / subpath).read_text(encoding="utf-8")
-    fingers = [j.get("name", "") for j in ET.fromstring(text).iter("joint")
-               if "finger" in j.get("name", "") and j.get("type") != "fixed"]  # fmt: skip
-    spec: dict[str, Any] = {"kind": "urdf", "name": name, "urdf": text,
-                            "locked_joints": dict.fromkeys(fingers)}  # fmt: skip
-    if tool_frame:
-        spec["tool_frame"] = tool_frame
-    return build_robot(spec)
+    return build_robot(erd_arm_spec((root_dir / subpath).read_text(encoding="utf-8"), name,
+                                    tool_frame))
 
 
 def dh_robot(name: str) -> Robot:

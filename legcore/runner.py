@@ -307,11 +307,6 @@ def run(
 
 def _jsonable(obj: Any) -> Any:
     """Strict-JSON-safe copy: numpy → python, NaN/inf → None, tuples → lists."""
-    kind = type(obj)
-    if kind is str or kind is int or kind is bool or obj is None:
-        return obj
-    if kind is float:
-        return obj if obj - obj == 0.0 else None
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):

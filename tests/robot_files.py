@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import importlib.metadata
 import os
+import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
-__all__ = ["ERD_URDF", "erd_robots_dir"]
+__all__ = ["ERD_URDF", "erd_arm_spec", "erd_robots_dir"]
 
 #: name -> path of the URDF under the wheel's robots directory.
 ERD_URDF = {
@@ -54,3 +56,15 @@ def require_erd() -> Path:
             pytest.fail(why)
         pytest.skip(why)
     return root
+
+
+def erd_arm_spec(text: str, name: str, tool_frame: str | None = None) -> dict[str, Any]:
+    """The robot spec of an arm's URDF ``text`` with its gripper's finger joints locked (the
+    arm's own chain is what IK and the studies use)."""
+    fingers = [j.get("name", "") for j in ET.fromstring(text).iter("joint")
+               if "finger" in j.get("name", "") and j.get("type") != "fixed"]  # fmt: skip
+    spec: dict[str, Any] = {"kind": "urdf", "name": name, "urdf": text,
+                            "locked_joints": dict.fromkeys(fingers)}  # fmt: skip
+    if tool_frame:
+        spec["tool_frame"] = tool_frame
+    return spec

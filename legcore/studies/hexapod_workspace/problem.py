@@ -386,11 +386,6 @@ class HexapodWorkspaceProblem(StudyProblem):
         (:func:`legcore.studies.hexapod_workspace.report.extras`)."""
         return report.extras(self, front_X, front_F)
 
-    def mirrored_workspace(self, X: FloatArray, rep: dict[str, Any] | None = None
-                           ) -> dict[str, Any]:
-        """Fig. 8a and 8b (:func:`legcore.studies.hexapod_workspace.report.mirrored_workspace`)."""
-        return report.mirrored_workspace(self, X, rep)
-
 
 def _json_list(a: FloatArray) -> Any:
     """``a.tolist()`` with NaN/inf as None (strict JSON)."""

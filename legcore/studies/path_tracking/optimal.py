@@ -27,7 +27,7 @@ from legcore.studies.path_tracking.encodings import SpeedProfile, profile_knots
 from legcore.studies.path_tracking.timelaw import TimeLaw, profile_law
 from legcore.studies.path_tracking.topp import time_optimal
 
-__all__ = ["FINE_INTERVALS", "PhysicalMinimum", "feasible_profile", "initial_points",
+__all__ = ["FINE_INTERVALS", "feasible_profile", "initial_points",
            "knot_speed_caps", "physical_minimum"]
 
 FloatArray = NDArray[np.float64]

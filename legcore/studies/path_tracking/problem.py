@@ -64,6 +64,7 @@ from legcore.energy import mechanical_energy
 from legcore.robots.capabilities import Needs
 from legcore.robots.model import Robot
 from legcore.studies.path_tracking import baselines, decode, limits, optimal
+from legcore.studies.path_tracking.contract import PhysicalMinimum
 from legcore.studies.path_tracking.encodings import SegmentSpeeds, SpeedProfile, profile_knots
 from legcore.studies.path_tracking.joints import (
     JointPath,
@@ -342,7 +343,7 @@ class PathTrackingProblem(StudyProblem):
         return baselines.seed_max_V(self)
 
     @cached_property
-    def time_optimal(self) -> optimal.PhysicalMinimum | None:
+    def time_optimal(self) -> PhysicalMinimum | None:
         """The physical minimum: TOPP-RA's profile on a fine grid, holding every limit on a
         dense resampling (:func:`.optimal.physical_minimum`); None when none exists."""
         return optimal.physical_minimum(self)

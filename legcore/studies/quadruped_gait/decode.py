@@ -16,7 +16,7 @@ from legcore.studies.quadruped_gait.contract import GaitProblem
 from legcore.studies.study import Motion, Solution
 from legcore.support_polygon import support_polygon
 
-__all__ = ["periodic_jerk", "solution"]
+__all__ = ["solution"]
 
 FloatArray = NDArray[np.float64]
 
@@ -44,7 +44,7 @@ def solution(problem: GaitProblem, x: FloatArray) -> Solution:
     com_w = d["com"] + body
     tool_leg = problem.roles.index("FR")
     # seed 000 metrics per joint; D = the FR foot's path relative to the body over a cycle
-    jerk = periodic_jerk(t, qdd)
+    jerk = _periodic_jerk(t, qdd)
     jm = joint_metrics(t, q, tau, qd=qd, qdd=qdd, jerk=jerk, tool_pos=d["feet"][:, tool_leg])
     reachable = bool(np.all(d["reachable"]))
     feasible = bool(np.all(G <= 0.0))
@@ -154,7 +154,7 @@ def solution(problem: GaitProblem, x: FloatArray) -> Solution:
     )
 
 
-def periodic_jerk(t: FloatArray, qdd: FloatArray) -> FloatArray:
+def _periodic_jerk(t: FloatArray, qdd: FloatArray) -> FloatArray:
     """Jerk (K, n) rad/s³ by differentiating ``qdd`` on the closed cycle grid (periodic central
     differences; the cycle is C², so the jerk is piecewise continuous)."""
     dt = t[1] - t[0]

@@ -1,5 +1,5 @@
 """Decoding one ``swing_energy`` solution: the sampled trajectory, the seed's Table 2/3 metrics
-and the scene (:func:`solution`), the least obstacle clearance (:func:`clearance`) and the
+and the scene (:func:`solution`), the least obstacle clearance and the
 study-level facts a result reports (:func:`extras`). It reads the problem through
 :class:`~legcore.studies.swing_energy.contract.SwingProblem`."""
 
@@ -18,7 +18,7 @@ from legcore.studies.study import Box, Motion, Solution
 from legcore.studies.swing_energy.contract import SwingProblem
 from legcore.studies.swing_energy.geometry import point_box_distance
 
-__all__ = ["clearance", "extras", "joint_names", "on_body", "solution"]
+__all__ = ["extras", "solution"]
 
 FloatArray = NDArray[np.float64]
 
@@ -71,15 +71,15 @@ def solution(problem: SwingProblem, x: FloatArray, label: str | None = None) -> 
         "ground_z": problem.z_ground,
     }
     if problem.boxes:
-        metrics["obstacle_clearance"] = clearance(problem, P)
+        metrics["obstacle_clearance"] = _clearance(problem, P)
         scene["obstacles"] = list(problem.boxes)
         scene["obstacle_margin"] = problem.margin
     motion = Motion(
         t=problem.t.copy(), q=q, qd=qd, qdd=qdd, jerk=jerk, tau=tau, power=power, energy=energy,
-        tool=foot, joint_names=joint_names(problem.robot), robot=problem.label, scene=scene,
+        tool=foot, joint_names=_joint_names(problem.robot), robot=problem.label, scene=scene,
     )
     if problem.hip is not None:  # one leg of a legged robot: draw it on the body, at its hip
-        motion = on_body(motion, problem.hip, problem.robot_name, str(problem.params.leg))
+        motion = _on_body(motion, problem.hip, problem.robot_name, str(problem.params.leg))
     table = [
         {"metric": r.label, "key": r.key, "unit": r.unit,
          **({"values": list(r.per_joint)} if r.per_joint is not None else {"total": r.total})}
@@ -101,7 +101,7 @@ def solution(problem: SwingProblem, x: FloatArray, label: str | None = None) -> 
     return Solution(x=x.copy(), objectives={"score": score}, metrics=metrics, table=table,
                     motion=motion, extra=extra)
 
-def clearance(problem: SwingProblem, P: FloatArray, per_segment: int = 60) -> float:
+def _clearance(problem: SwingProblem, P: FloatArray, per_segment: int = 60) -> float:
     """Least distance (m) of the sampled link segments P (K, M, 3) to the boxes (no
     margin)."""
     lam = np.linspace(0.0, 1.0, per_segment)[:, None]
@@ -144,7 +144,7 @@ def extras(problem: SwingProblem, front_X: FloatArray) -> dict[str, Any]:
 
 
 
-def on_body(motion: Motion, hip: FloatArray, robot: str, leg: str) -> Motion:
+def _on_body(motion: Motion, hip: FloatArray, robot: str, leg: str) -> Motion:
     """``motion`` of one leg moved from its hip frame to the body frame (hip with the body's
     axes: a translation), named after the whole robot and that leg (for drawing it)."""
     d = hip[:3, 3]
@@ -160,6 +160,6 @@ def on_body(motion: Motion, hip: FloatArray, robot: str, leg: str) -> Motion:
                                robot=robot, legs=(leg,), scene=scene)
 
 
-def joint_names(robot: Robot) -> tuple[str, ...]:
+def _joint_names(robot: Robot) -> tuple[str, ...]:
     names = [robot.model.names[i] for i in range(1, robot.model.njoints)]
     return tuple(names) if len(names) == robot.nq else tuple(f"q{i + 1}" for i in range(robot.nq))

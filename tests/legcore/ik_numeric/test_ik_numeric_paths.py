@@ -8,9 +8,6 @@ Robots, paths and the FK check: ``tests/legcore/ik_numeric_helpers.py``.
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
-from typing import Any
-
 import numpy as np
 import pytest
 
@@ -199,17 +196,10 @@ def test_a_jump_along_a_path_is_reported_as_a_flip(ur5: Robot, task: str) -> Non
 
 def erd_robot(subpath: str, name: str, tool_frame: str | None = None) -> Robot:
     """Build a robot from an example-robot-data URDF; gripper fingers locked."""
-    from tests.robot_files import require_erd
+    from tests.robot_files import erd_arm_spec, require_erd
 
-    root_dir = require_erd()
-    text = (root_dir / subpath).read_text(encoding="utf-8")
-    fingers = [j.get("name", "") for j in ET.fromstring(text).iter("joint")
-               if "finger" in j.get("name", "") and j.get("type") != "fixed"]  # fmt: skip
-    spec: dict[str, Any] = {"kind": "urdf", "name": name, "urdf": text,
-                            "locked_joints": dict.fromkeys(fingers)}  # fmt: skip
-    if tool_frame:
-        spec["tool_frame"] = tool_frame
-    return build_robot(spec)
+    text = (require_erd() / subpath).read_text(encoding="utf-8")
+    return build_robot(erd_arm_spec(text, name, tool_frame))
 
 
 @pytest.mark.parametrize(
