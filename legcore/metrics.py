@@ -5,7 +5,7 @@ All objectives are minimised. ``F`` is always an ``(n, m)`` array of objective v
 - ``non_dominated_sort`` ranks points into fronts (0 = non-dominated): Deb's fast sort, compiled
   (``legcore.pareto_kernels``); with ``cv`` it applies Deb's constrained domination (feasible
   first, then by violation). ``crowding_distance`` is compiled too.
-- ``hypervolume`` is exact (pymoo's indicator, computed by moocore) and returns the value together
+- ``hypervolume`` is exact (moocore, what pymoo's indicator calls) and returns the value together
   with the reference point it was measured against, so a number is never reported without it.
 - ``igd`` is the mean distance from each point of a reference front to its nearest point in ``F``.
 - ``knee_point`` is the point of a front farthest (on the ideal side) from the hyperplane through
@@ -187,7 +187,7 @@ def hypervolume(F: ArrayLike, ref_point: ArrayLike) -> Hypervolume:
     Points that do not strictly dominate ``ref_point`` contribute nothing. Compare runs only
     with the same reference point; it is recorded in the result.
     """
-    from pymoo.indicators.hv import HV  # heavy import, only where needed
+    from moocore import hypervolume as exact_hypervolume  # what pymoo's HV calls
 
     F = _as_F(F)
     ref = np.asarray(ref_point, dtype=float).ravel()
@@ -196,9 +196,10 @@ def hypervolume(F: ArrayLike, ref_point: ArrayLike) -> Hypervolume:
     if not np.all(np.isfinite(ref)):
         raise ValueError("ref_point: must be finite")
     inside = np.all(F < ref, axis=1)
-    value = float(HV(ref_point=ref).do(F[inside])) if inside.any() else 0.0
-    return Hypervolume(value=value, ref_point=tuple(float(r) for r in ref),
-                       n_points=int(inside.sum()))
+    n_inside = int(inside.sum())
+    points = F if n_inside == F.shape[0] else F[inside]
+    value = float(exact_hypervolume(points, ref=ref)) if n_inside else 0.0
+    return Hypervolume(value=value, ref_point=tuple(float(r) for r in ref), n_points=n_inside)
 
 
 def igd(F: ArrayLike, reference_front: ArrayLike) -> float:

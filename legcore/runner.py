@@ -8,6 +8,7 @@ call. Both produce the same :class:`RunResult` for the same spec and seed.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -168,7 +169,12 @@ def job_size(prepared: Prepared) -> JobSize:
 
 @dataclass(frozen=True, eq=False)
 class RunResult:
-    """The outcome of a job (JSON via :meth:`to_dict`; time series in ``best.motion``)."""
+    """The outcome of a job (JSON via :meth:`to_dict`; time series in ``best.motion``).
+
+    ``extras`` (the study's outputs computed from the final front: workspaces, masks, … —
+    up to ~0.5 MB) are made the first time they are read (``study_extras``), so a caller that
+    never reads them — the worker: the API makes them on demand, ``services.api.study_extras``
+    — never pays for them."""
 
     spec: JobSpec
     status: str
@@ -176,7 +182,9 @@ class RunResult:
     pareto: list[dict[str, Any]]
     baselines: dict[str, Solution]
     history: list[dict[str, Any]]
-    extras: dict[str, Any]
+    #: Makes the study's extras (``StudyProblem.extras`` of the final front), called at most
+    #: once, by :attr:`extras`.
+    study_extras: Callable[[], dict[str, Any]] = dataclasses.field(repr=False, compare=False)
     optimizer: dict[str, Any]
     objective_names: tuple[str, ...]
     start: dict[str, Any] | None = None
@@ -186,18 +194,24 @@ class RunResult:
     #: refined optimum, or an older result).
     best_index: int | None = None
 
+    @functools.cached_property
+    def extras(self) -> dict[str, Any]:
+        """The study's extras of the final front (made on first use)."""
+        return self.study_extras()
+
     @property
     def feasible(self) -> bool:
         """True when the optimum violates no constraint (``best.violations`` is empty)."""
         return not self.best.violations
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self, *, extras: bool = True) -> dict[str, Any]:
         """``result.json``: spec, status, feasible and the optimum's violations, the task (the
-        robot-relative parameters and their rules), best, pareto, baselines, history, extras,
-        optimizer, start (what the optimiser earned: `legcore.earned`), gap (to the best the
-        problem allows: `legcore.optimality_gap`), best_index (the optimum's place on the
-        front, or None)."""
-        return _jsonable(
+        robot-relative parameters and their rules), best, pareto, baselines, history, extras
+        (left out with ``extras`` False: the worker's result, whose extras the API makes on
+        demand), optimizer, start (what the optimiser earned: `legcore.earned`), gap (to the
+        best the problem allows: `legcore.optimality_gap`), best_index (the optimum's place on
+        the front, or None)."""
+        doc = _jsonable(
             {
                 "spec": self.spec.model_dump(mode="json"),
                 "status": self.status,
@@ -210,12 +224,14 @@ class RunResult:
                 "best_index": self.best_index,
                 "baselines": {k: v.summary() for k, v in self.baselines.items()},
                 "history": self.history,
-                "extras": self.extras,
                 "optimizer": self.optimizer,
                 "start": self.start,
                 "gap": self.gap,
             }
         )
+        if extras:
+            doc["extras"] = _jsonable(self.extras)
+        return doc
 
 
 def finalize(prepared: Prepared, result: Result) -> RunResult:
@@ -243,7 +259,9 @@ def finalize(prepared: Prepared, result: Result) -> RunResult:
         best_index=int(on_front[0]) if on_front.size else None,
         baselines={k: checked(problem, v) for k, v in problem.baseline_solutions().items()},
         history=[r.to_dict() for r in result.history],
-        extras=problem.extras(np.asarray(result.front_X), np.asarray(result.front_F)),
+        study_extras=functools.partial(
+            problem.extras, np.asarray(result.front_X), np.asarray(result.front_F)
+        ),
         optimizer={
             "kind": result.algorithm,
             "params": result.params,

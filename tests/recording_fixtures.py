@@ -74,7 +74,7 @@ def fake_result(
             for k, v in (baselines or {}).items()
         },
         history=history,
-        extras={},
+        study_extras=dict,
         optimizer={"kind": "moead"},
         objective_names=tuple(f"f{j + 1}" for j in range(m)),
     )

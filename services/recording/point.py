@@ -161,7 +161,7 @@ def write_point_recording(
         pareto=[dict(p) for p in pareto],
         baselines=problem.baseline_solutions(),
         history=[dict(h) for h in history],
-        extras={},
+        study_extras=dict,
         optimizer={},
         objective_names=tuple(problem.objective_names),
     )

@@ -303,7 +303,9 @@ def _store_attempt(
 ) -> None:
     artifacts: list[ArtifactIn] = []
     warnings: list[str] = list(notes)
-    doc = result.to_dict()
+    # the study's extras (up to ~0.5 MB: workspaces, masks) are not made here: the API makes
+    # them when they are first asked for (services.api.study_extras; issue 23: overhead)
+    doc = result.to_dict(extras=False)
     blob = json.dumps(doc, separators=(",", ":")).encode()  # compact: no whitespace
     stored = store.put(job_id, "result", blob, suffix=".json", attempt=attempt)
     artifacts.append(ArtifactIn("result", *stored))
@@ -330,8 +332,6 @@ def _store_attempt(
                 summary={
                     "table": best["table"],
                     "extra": best["extra"],
-                    # the study's extras (up to ~0.5 MB: workspaces, masks) live in result.json
-                    # only; GET /jobs/{id}/result reads them from there (issue 12: overhead)
                     "optimizer": doc["optimizer"],
                     "start": doc.get("start"),
                     "history": doc["history"],

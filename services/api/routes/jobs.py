@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 from typing import Annotated, Any
 
@@ -13,7 +12,6 @@ from services.api.artifact_download import artifact_response
 from services.api.convergence import convergence
 from services.api.deps import (
     MAX_OFFSET,
-    ApiContext,
     Context,
     CurrentKey,
     IdPrefix,
@@ -35,6 +33,7 @@ from services.api.schemas import (
     ResultOut,
     objective_names,
 )
+from services.api.study_extras import study_extras
 from services.api.submission import (
     IdempotencyKey,
     Replay,
@@ -48,9 +47,8 @@ from services.api.validation_pool import check_job
 from services.store import lifecycle
 from services.store import output_queries as oq
 from services.store import repository as repo
-from services.store.errors import ArtifactError
 from services.store.idempotency import request_fingerprint
-from services.store.records import ArtifactRecord, JobRecord
+from services.store.records import JobRecord
 from services.store.specs import json_size
 from services.store.states import JobStatus
 
@@ -206,29 +204,11 @@ def get_result(job_id: str, key: CurrentKey, ctx: Context) -> ResultOut:
     out = ResultOut.from_records(result, baselines, artifacts, job)
     summary = out.summary
     if isinstance(summary, dict) and "extras" not in summary:
-        extras, warning = _stored_extras(ctx, artifacts)
+        extras, warning = study_extras(ctx, job, artifacts)
         out.summary = {**summary, "extras": extras}
         if warning is not None:
             out.summary["extras_warning"] = warning
     return out
-
-
-def _stored_extras(
-    ctx: ApiContext, artifacts: tuple[ArtifactRecord, ...]
-) -> tuple[Any, str | None]:
-    """``(extras, warning)``: the study's extras from the job's ``result.json`` (the worker
-    keeps them out of the database row); ``{}`` for a job without that artifact, and ``{}``
-    with a warning saying why when it cannot be read (gone, store unreachable, corrupted): the
-    rest of the result is the database's."""
-    art = next((a for a in artifacts if a.kind == "result"), None)
-    if art is None:
-        return {}, None
-    try:
-        doc = json.loads(ctx.artifacts.read(art.relative_path, art.sha256))
-    except ArtifactError as exc:
-        log.warning("result extras of %s unavailable: %s", art.relative_path, exc)
-        return {}, f"the study's extras (in {art.relative_path}) are unavailable: {exc}"
-    return doc.get("extras") or {}, None
 
 
 @router.get(
