@@ -36,6 +36,7 @@ __all__ = [
     "crowding_distance",
     "Hypervolume",
     "hypervolume",
+    "hypervolume_value",
     "reference_point",
     "igd",
     "knee_point",
@@ -187,19 +188,25 @@ def hypervolume(F: ArrayLike, ref_point: ArrayLike) -> Hypervolume:
     Points that do not strictly dominate ``ref_point`` contribute nothing. Compare runs only
     with the same reference point; it is recorded in the result.
     """
-    from moocore import hypervolume as exact_hypervolume  # what pymoo's HV calls
-
     F = _as_F(F)
     ref = np.asarray(ref_point, dtype=float).ravel()
     if ref.shape != (F.shape[1],):
         raise ValueError(f"ref_point: expected {F.shape[1]} coordinates, got {ref.shape[0]}")
     if not np.all(np.isfinite(ref)):
         raise ValueError("ref_point: must be finite")
-    inside = np.all(F < ref, axis=1)
-    n_inside = int(inside.sum())
-    points = F if n_inside == F.shape[0] else F[inside]
-    value = float(exact_hypervolume(points, ref=ref)) if n_inside else 0.0
+    n_inside = int(np.all(F < ref, axis=1).sum())
+    value = hypervolume_value(F, ref) if n_inside else 0.0
     return Hypervolume(value=value, ref_point=tuple(float(r) for r in ref), n_points=n_inside)
+
+
+def hypervolume_value(F: np.ndarray, ref: np.ndarray) -> float:
+    """:func:`hypervolume`'s value without its checks, for a caller that measures many fronts
+    against one checked reference point (the worker, every generation): ``F`` (n, m) float64
+    without NaN, ``ref`` (m,) finite. Points that do not strictly dominate ``ref`` contribute
+    nothing (moocore, what pymoo's indicator calls, ignores them)."""
+    from moocore import hypervolume as exact_hypervolume
+
+    return float(exact_hypervolume(F, ref=ref)) if F.shape[0] else 0.0
 
 
 def igd(F: ArrayLike, reference_front: ArrayLike) -> float:

@@ -225,11 +225,13 @@ def _run_claimed(
         )
         trials.add(progress, last=run.done)
         now = time.monotonic()
-        checkpoint_due = run.done or (
-            progress.generation % settings.checkpoint_every == 0
-            and now - last_checkpoint >= min_checkpoint_s
-        )
-        if checkpoint_due or now - last_flush >= PROGRESS_FLUSH_S:
+        # the last generation too keeps the spacing: a job that dies while its result is
+        # stored re-runs at most the generations since its last checkpoint (a job shorter
+        # than CHECKPOINT_MIN_S has none and starts again: it costs less than a checkpoint)
+        checkpoint_due = (
+            progress.generation % settings.checkpoint_every == 0 or run.done
+        ) and now - last_checkpoint >= min_checkpoint_s
+        if checkpoint_due or run.done or now - last_flush >= PROGRESS_FLUSH_S:
             # Progress rows (and the checkpoint when due) in one transaction: a generation of a
             # few ms must not wait on a database commit, and two workers on one SQLite file must
             # not serialise on it. Rows after the last checkpoint are re-run on resume and

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from legcore.metrics import hypervolume, reference_point
+from legcore.metrics import hypervolume_value, reference_point
 
 __all__ = ["HypervolumeTracker"]
 
@@ -30,6 +30,7 @@ class HypervolumeTracker:
         """``ref``: the job's stored reference point, or None to derive it from the first front."""
         self.ref: np.ndarray | None = None if ref is None else np.asarray(ref, dtype=float)
         self._unsaved: list[float] | None = None
+        self._ref_fits: bool | None = None
 
     def measure(self, F: Any) -> float | None:
         """Hypervolume (objective units multiplied) of the front ``F`` (k, m), or None when
@@ -37,15 +38,19 @@ class HypervolumeTracker:
         F = np.asarray(F, dtype=float)
         if F.ndim != 2 or F.shape[1] < 2:
             return None
-        F = F[np.all(np.isfinite(F), axis=1)]
+        finite = np.isfinite(F).all(axis=1)
+        if not finite.all():
+            F = F[finite]
         if F.shape[0] == 0:
             return None
         if self.ref is None:
             self.ref = reference_point(F)
             self._unsaved = [float(v) for v in self.ref]
-        if self.ref.shape != (F.shape[1],) or not np.all(np.isfinite(self.ref)):
+        if self._ref_fits is None:  # checked once: the point is fixed for the job
+            self._ref_fits = bool(self.ref.ndim == 1 and np.all(np.isfinite(self.ref)))
+        if not self._ref_fits or self.ref.shape != (F.shape[1],):
             return None
-        return float(hypervolume(F, self.ref).value)
+        return hypervolume_value(F, self.ref)
 
     def take_unsaved_ref(self) -> list[float] | None:
         """The reference point if it was derived here and not handed out for storing yet."""

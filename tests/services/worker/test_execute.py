@@ -111,16 +111,22 @@ def test_a_cancelled_job_is_not_run(settings: Settings) -> None:
     assert _get(job_id).status == "cancelled"
 
 
-def test_progress_rows_are_all_written_when_batched(settings: Settings) -> None:
-    """Rows are flushed in batches (every 0.5 s or at a checkpoint); none is lost at the end."""
-    job_id = _job({**SPEC, "budget": {"generations": 8}}, total=8)
+def test_progress_rows_are_all_written_when_batched(
+    settings: Settings, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Rows are flushed in batches (every 0.5 s or at a checkpoint); none is lost at the end.
+    The final state is checkpointed when the last checkpoint is ``CHECKPOINT_MIN_S`` old (a
+    job shorter than that has none: re-running it costs less than its checkpoint)."""
     sparse = settings.with_overrides(checkpoint_every=1000)
-    assert execute.execute_job(job_id, sparse, wid="w1").status == "succeeded"
-    with session_scope() as s:
-        rows = oq.list_generations(s, job_id)
-        ckpt = latest_checkpoint(s, job_id)
-    assert [r.generation for r in rows] == list(range(1, 9))
-    assert ckpt is not None and ckpt.generation == 8  # the final state is always checkpointed
+    for min_s, final in ((execute.CHECKPOINT_MIN_S, None), (0.0, 8)):
+        monkeypatch.setattr(execute, "CHECKPOINT_MIN_S", min_s)
+        job_id = _job({**SPEC, "budget": {"generations": 8}}, total=8)
+        assert execute.execute_job(job_id, sparse, wid="w1").status == "succeeded"
+        with session_scope() as s:
+            rows = oq.list_generations(s, job_id)
+            ckpt = latest_checkpoint(s, job_id)
+        assert [r.generation for r in rows] == list(range(1, 9))
+        assert (ckpt and ckpt.generation) == final
 
 
 def test_a_stale_worker_never_overwrites_the_winners_artifacts(
