@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -101,7 +102,10 @@ def test_command_line_warm_up_includes_the_numerical_ik(monkeypatch: pytest.Monk
 
     ran: list[str | None] = []
     monkeypatch.setitem(w._EXTRA, "numeric_ik", lambda: ran.append("numeric_ik"))
-    monkeypatch.setattr("legcore.runner.run", lambda spec: ran.append(spec["problem"]["kind"]))
+    monkeypatch.setattr(  # a result whose extras the warm-up reads (the API's on-demand work)
+        "legcore.runner.run",
+        lambda spec: SimpleNamespace(extras=ran.append(spec["problem"]["kind"])),
+    )
     kinds = [k for k in studies() if k in STUDY_MODULES]
     w.warm_up(verbose=False)
     assert ran == kinds
