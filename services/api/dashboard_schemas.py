@@ -15,7 +15,7 @@ from services.api.verdict_schemas import (
     ViolationOut,
     violations_out,
 )
-from services.store.dashboard_queries import JobRow
+from services.store.dashboard_queries import PAGE_COUNT_CAP, JobRow
 from services.store.records import BaselineRecord
 from services.store.states import JobStatus
 
@@ -122,13 +122,22 @@ class JobRowOut(BaseModel):
         )
 
 
+#: The jobs page's count cap, as the docs write numbers (1 000).
+_CAP, _CAP_1 = (f"{n:,}".replace(",", " ") for n in (PAGE_COUNT_CAP, PAGE_COUNT_CAP + 1))
+
+
 class JobRowPage(BaseModel):
     """A page of the jobs page: rows, how many match, and the cursor of the next page."""
 
     items: list[JobRowOut]
     total: int = Field(
-        description="Jobs matching the filters (all pages), counted up to 10 001: "
-        "10 001 means more than 10 000."
+        description=f"Jobs matching the filters (all pages), counted up to {_CAP_1}: when "
+        f"`total_exact` is false, more than {_CAP} match (an exact count would cost what every "
+        "match costs, more as the store grows)."
+    )
+    total_exact: bool = Field(
+        description="True when `total` is the number of matching jobs; false when the count "
+        f'stopped at {_CAP_1} (show "more than {PAGE_COUNT_CAP:,}").'
     )
     limit: int
     offset: int

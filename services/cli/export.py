@@ -85,7 +85,10 @@ def export_jobs(
     sweep: Annotated[
         str | None, typer.Option(help="only the jobs of this sweep (id or prefix)")
     ] = None,
-    search: Annotated[str | None, typer.Option("--search", "-q", help="words to match")] = None,
+    search: Annotated[
+        str | None,
+        typer.Option("--search", "-q", help="words to match (one of 3 characters or more)"),
+    ] = None,
     url: UrlOpt = None,
     key: KeyOpt = None,
 ) -> None:

@@ -20,30 +20,41 @@ from dataclasses import dataclass
 from datetime import timedelta
 from typing import Any, Literal
 
-from sqlalchemy import ColumnElement, Select, func, insert, literal, select
+from sqlalchemy import ColumnElement, FromClause, Select, func, insert, literal, select
 from sqlalchemy.orm import Session
 
 from services.store.job_search_paging import (
     _JOB_SORTS,
+    _count,
     _fts_driven,
     _fts_query,
+    _id_driven,
+    _id_words,
     _keyset_rows,
     _like,
     _Order,
     _row_value,
+    _rows_by_id,
     _search_fts,
     _search_words,
     encode_cursor,
+    unindexed_search,
 )
 from services.store.records import JobRecord
 from services.store.search_index import MIN_INDEXED_WORD
-from services.store.sql import COUNT_CAP
 from services.store.states import JobStatus
 from services.store.tables import JOB_LABELS, JOBS, SWEEPS
 
 #: Jobs created this long before the newest labelled one are checked again for a label (a
 #: transaction that committed late); PostgreSQL commits a job within ms of its created_at.
 LABEL_SLACK = timedelta(seconds=60)
+
+#: The jobs page counts a listing's matches up to this many, then says "more than"
+#: (``JobRowPage.total_exact`` False, ``total`` = ``PAGE_COUNT_CAP + 1``). Lower than the API
+#: list's ``COUNT_CAP``: a search's count costs what its matches cost, so a frequent word stops
+#: costing more as the store grows once 1 001 are found; it is also where a search stops
+#: sorting its matches and walks the page's order instead.
+PAGE_COUNT_CAP = 1_000
 
 SortKey = Literal["created", "finished", "status", "kind", "robot", "optimizer", "progress", "best"]
 SORT_KEYS: tuple[str, ...] = (
@@ -196,14 +207,16 @@ class JobRow:
 
 @dataclass(frozen=True)
 class JobRowPage:
-    """A page of jobs: the rows, how many match, and the keyset cursor of the next page (None
-    on the last page)."""
+    """A page of jobs: the rows, how many match (``total_exact`` False: at least ``total``,
+    the count stopped at ``PAGE_COUNT_CAP + 1``; or not counted, -1), and the keyset cursor of
+    the next page (None on the last page)."""
 
     items: tuple[JobRow, ...]
     total: int
     limit: int
     offset: int
     next_cursor: str | None
+    total_exact: bool = True
 
 
 def _label_filtered(f: JobFilter) -> bool:
@@ -264,10 +277,12 @@ def list_job_rows(
     ``(owner, created_at)`` indexes. Every order is ``(sort column, created_at, id)``, NULLs
     last; ``cursor`` (a page's ``next_cursor``, same sort and order) continues after the last
     row of the previous page in O(limit) whatever the depth; ``offset`` pages by counting
-    (O(offset)). ``total`` counts at most ``COUNT_CAP + 1`` matches (``count`` False: not at
-    all, -1; the export streams pages without it). A search reads its index (see "word search
-    by index" in ``job_search_paging``); ``search_index`` False matches every word by LIKE
-    instead (the same rows: the reference of the tests and the benchmark)."""
+    (O(offset)). ``total`` counts at most ``PAGE_COUNT_CAP + 1`` matches (``total_exact``
+    False when it stopped there; ``count`` False: not at all, -1; the export streams pages
+    without it). A search reads its index and a word shaped like an id the primary key (see
+    "word search by index" in ``job_search_paging``); ``search_index`` False matches every
+    word by LIKE instead (the reference of the tests and the benchmark: the same rows, but
+    that an id word finds ids, not a name or tag containing one)."""
     if sort not in SORT_KEYS:
         raise ValueError(f"sort: expected one of {', '.join(SORT_KEYS)}, got {sort!r}")
     by_labels = _label_filtered(f) or sort in ("kind", "robot", "optimizer")
@@ -277,18 +292,19 @@ def list_job_rows(
     total = -1
     stmt: Select[Any] | None = None
     keys_first = False  # stmt selects the page's ids: its rows are read after the sort
-    fts = _fts_query(_search_words(f.search)) if search_index and f.search else None
-    if fts is not None and _search_fts(session):
-        conditions = _conditions(owner_key_id, f, by_labels, indexed=True)
-        source, match = _fts_driven(fts, mixed)
-        matches = select(literal(1)).select_from(source).where(match, *conditions)
-        capped = matches.limit(COUNT_CAP + 1).subquery()
-        n = int(session.execute(select(func.count()).select_from(capped)).scalar_one())
-        total = n if count else -1
-        if n <= COUNT_CAP:  # else a frequent word: walk the page's order (LIKE), below
-            source, match = _fts_driven(fts, mixed or sort in _JOB_SORTS)
-            keys = select(JOB_LABELS.c.job_id.label("id")).select_from(source)
-            stmt = keys.where(match, *conditions)
+    words = _search_words(f.search) if search_index else []
+    driven = _driven_by_index(session, owner_key_id, f, by_labels, words)
+    if driven is not None:
+        by_id = bool(_id_words(words))
+        n = -1
+        if count or not by_id:
+            n = _count(session, *driven(mixed), PAGE_COUNT_CAP)
+            total = n if count else -1
+        # an id's rows are few (a sweep's at most): always sorted; a word in more jobs than
+        # the cap: walk the page's order (LIKE), below
+        if by_id or n <= PAGE_COUNT_CAP:
+            source, where = driven(mixed or sort in _JOB_SORTS)
+            stmt = select(JOB_LABELS.c.job_id.label("id")).select_from(source).where(*where)
             keys_first = True
     if stmt is None:
         conditions = _conditions(owner_key_id, f, by_labels)
@@ -300,9 +316,7 @@ def list_job_rows(
         stmt = select(JOBS, *labels).select_from(joined).where(*conditions)
         if count and total < 0:
             source = joined if mixed else JOB_LABELS if by_labels else JOBS
-            matches = select(literal(1)).select_from(source).where(*conditions)
-            capped = matches.limit(COUNT_CAP + 1).subquery()
-            total = int(session.execute(select(func.count()).select_from(capped)).scalar_one())
+            total = _count(session, source, conditions, PAGE_COUNT_CAP)
     order = _Order(sort, descending, by_labels)
     if cursor is not None or offset == 0:  # one more row than asked: is there a next page?
         rows = _keyset_rows(session, stmt, order, limit + 1, cursor)
@@ -329,17 +343,34 @@ def list_job_rows(
     if more:
         last = rows[-1]
         next_cursor = encode_cursor(sort, _row_value(last, sort), last["created_at"], last["id"])
-    return JobRowPage(items, total, limit, offset, next_cursor)
+    exact = 0 <= total <= PAGE_COUNT_CAP
+    return JobRowPage(items, total, limit, offset, next_cursor, total_exact=exact)
 
 
-def _rows_by_id(session: Session, ids: list[str], labels: list[Any]) -> list[Any]:
-    """The page rows (job and labels) of ``ids``, in that order."""
-    if not ids:
-        return []
-    joined = JOB_LABELS.join(JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
-    q = select(JOBS, *labels).select_from(joined).where(JOB_LABELS.c.job_id.in_(ids))
-    found = {r["id"]: r for r in session.execute(q).mappings()}
-    return [found[i] for i in ids if i in found]
+#: ``driven(mixed)``: the FROM clause a search's index drives (with the jobs table when
+#: ``mixed``) and its WHERE.
+_Driven = Callable[[bool], "tuple[FromClause, list[ColumnElement[bool]]]"]
+
+
+def _driven_by_index(
+    session: Session, owner_key_id: str, f: JobFilter, by_labels: bool, words: list[str]
+) -> _Driven | None:
+    """How a search's index drives the query: from the jobs of an id word (every store), else
+    from the FTS matches of its long words (SQLite with the FTS table); None: by LIKE."""
+    ids = _id_words(words)
+    if ids:  # every word is checked by LIKE on the few rows the id finds
+        conditions = _conditions(owner_key_id, f, by_labels)
+        return lambda mixed: (_id_driven(ids[0], mixed), conditions)
+    fts = _fts_query(words)
+    if fts is None or not _search_fts(session):
+        return None
+    conditions = _conditions(owner_key_id, f, by_labels, indexed=True)
+
+    def by_fts(mixed: bool) -> tuple[FromClause, list[ColumnElement[bool]]]:
+        source, match = _fts_driven(fts, mixed)
+        return source, [match, *conditions]
+
+    return by_fts
 
 
 def _job_record(row: Any) -> JobRecord:
@@ -349,8 +380,8 @@ def _job_record(row: Any) -> JobRecord:
 
 
 __all__ = [
-    "COUNT_CAP",
     "LABEL_SLACK",
+    "PAGE_COUNT_CAP",
     "SORT_KEYS",
     "JobFilter",
     "JobRow",
@@ -360,4 +391,5 @@ __all__ = [
     "list_job_rows",
     "missing_labels",
     "sync_labels",
+    "unindexed_search",
 ]

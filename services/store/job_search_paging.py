@@ -20,8 +20,11 @@ from sqlalchemy import (
     FromClause,
     Select,
     column,
+    func,
     literal,
     literal_column,
+    or_,
+    select,
     table,
     tuple_,
 )
@@ -30,6 +33,7 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.compiler import SQLCompiler
 from sqlalchemy.sql.selectable import Join
 
+from services.store.id_prefix import UUID_SHAPE, id_prefix_condition, id_prefix_range
 from services.store.search_index import MIN_INDEXED_WORD, SEARCH_FTS
 from services.store.states import JobStatus
 from services.store.tables import JOB_LABELS, JOBS
@@ -47,6 +51,15 @@ def _search_words(search: str | None) -> list[str]:
     return [w.lower() for w in (search or "").split()[:8]]
 
 
+def unindexed_search(search: str | None) -> bool:
+    """True when a search has words and none of them is one an index answers: every word is
+    shorter than ``MIN_INDEXED_WORD`` (no trigram in it), so on any store it would read every
+    label of the key. Short words beside a longer one are fine: they are checked on its
+    matches. (The API refuses such a search, 422; the store still runs it, by LIKE.)"""
+    words = _search_words(search)
+    return bool(words) and all(len(w) < MIN_INDEXED_WORD for w in words)
+
+
 # ----------------------------------------------------------------- word search by index
 # PostgreSQL answers the LIKE of each word from the pg_trgm GIN index (revision 0009): the query
 # does not change. SQLite answers words of 3 characters or more from the FTS5 trigram table
@@ -54,10 +67,19 @@ def _search_words(search: str | None) -> list[str]:
 # being lower-cased); shorter words — which no trigram can answer — and stores without the
 # table (SQLite without FTS5 / trigram) keep LIKE. The matches drive the query (``_CrossJoin``:
 # SQLite's planner, without statistics, would otherwise walk the key's whole index and probe
-# each row): counted up to COUNT_CAP + 1, then sorted by their keys alone and the page's rows
-# read. A word in more than COUNT_CAP of the key's jobs is frequent enough that walking the
-# page's order and checking each row by LIKE finds a page sooner than sorting every match, so
-# that page is read the old way.
+# each row): counted up to the page's count cap + 1, then sorted by their keys alone and the
+# page's rows read. A word in more of the key's jobs than the cap is frequent enough that
+# walking the page's order and checking each row by LIKE finds a page sooner than sorting every
+# match, so that page is read the old way.
+#
+# A word shaped like an id (``_id_words``: a job or sweep id, whole or its start through the
+# first dash) is answered by the primary key's range and the sweep index's instead, on every
+# store: its trigrams are those of ids, whose lists grow with the store, while the jobs whose id
+# or sweep id starts with the word are found in O(1) (a sweep's jobs: O(sweep)). Within an id
+# such a word can only stand at the start (its dash must meet the id's first dash), so this
+# finds every job whose id or sweep id contains it; what it does not find is a job whose *name,
+# robot or tags* contain another job's id — LIKE would (``search_index`` False still does).
+# Every word is still checked by LIKE on the rows found, so it never finds more than LIKE.
 
 _FTS = table(SEARCH_FTS, column("rowid"))
 _HAS_FTS = "legopt_search_fts"  # key of the answer in a DBAPI connection's info
@@ -111,6 +133,63 @@ def _fts_driven(query: str, mixed: bool) -> tuple[FromClause, ColumnElement[bool
     if mixed:
         source = _CrossJoin(source, JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
     return source, literal_column(SEARCH_FTS).match(query)
+
+
+#: An id word has at least this many characters: 8 hex digits and the id's first dash (8 hex
+#: digits alone — the short id — may as well be a date or a commit in a name: trigrams).
+MIN_ID_WORD = 9
+
+
+def _id_words(words: list[str]) -> list[str]:
+    """The words of a search shaped like a job or sweep id (``services.store.tables.new_id``):
+    a UUID, or its first ``MIN_ID_WORD`` characters or more, in the UUID's shape."""
+    return [w for w in words if MIN_ID_WORD <= len(w) and id_prefix_range(w) is not None]
+
+
+def _id_condition(column: ColumnElement[str], word: str) -> ColumnElement[bool]:
+    """``column`` starts with the id word ``word``: equal to a whole id, else a range."""
+    if len(word) == len(UUID_SHAPE):
+        return column == word
+    return id_prefix_condition(column, word)
+
+
+#: The jobs an id word finds (an alias: the query may join the jobs table again); made once,
+#: its columns' proxies cost more to build than the query to run.
+_BY_ID = JOBS.alias("by_id")
+
+
+def _id_driven(word: str, mixed: bool) -> FromClause:
+    """The FROM clause that walks the jobs whose id or sweep id starts with the id word ``word``
+    first (ranges of the primary key and of the sweep index), then their labels (then their
+    jobs again, when ``mixed``): O(1) at any store size, O(sweep) for a sweep's id."""
+    found = _BY_ID
+    hits = select(found.c.id).where(
+        or_(_id_condition(found.c.id, word), _id_condition(found.c.sweep_id, word))
+    )
+    ids = hits.subquery("id_hits")
+    source: FromClause = _CrossJoin(ids, JOB_LABELS, JOB_LABELS.c.job_id == ids.c.id)
+    if mixed:
+        source = _CrossJoin(source, JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
+    return source
+
+
+def _count(
+    session: Session, source: FromClause, where: list[ColumnElement[bool]], cap: int
+) -> int:
+    """The rows of ``source`` matching ``where``, counted up to ``cap + 1``."""
+    matches = select(literal(1)).select_from(source).where(*where)
+    capped = matches.limit(cap + 1).subquery()
+    return int(session.execute(select(func.count()).select_from(capped)).scalar_one())
+
+
+def _rows_by_id(session: Session, ids: list[str], labels: list[Any]) -> list[Any]:
+    """The page rows (job and ``labels``) of ``ids``, in that order."""
+    if not ids:
+        return []
+    joined = JOB_LABELS.join(JOBS, JOBS.c.id == JOB_LABELS.c.job_id)
+    q = select(JOBS, *labels).select_from(joined).where(JOB_LABELS.c.job_id.in_(ids))
+    found = {r["id"]: r for r in session.execute(q).mappings()}
+    return [found[i] for i in ids if i in found]
 
 
 # --------------------------------------------------------------------------- keyset paging
@@ -251,7 +330,9 @@ def _keyset_rows(
 
 
 __all__ = [
+    "MIN_ID_WORD",
     "NULLABLE_SORTS",
     "decode_cursor",
     "encode_cursor",
+    "unindexed_search",
 ]

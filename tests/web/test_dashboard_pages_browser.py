@@ -58,6 +58,23 @@ def test_the_verdict_is_red_or_green(page: Any, stack: Stack, shots: Path) -> No
     assert page.locator(f"tr[data-job='{bad_id}']").count() == 1
     page.screenshot(path=shots / "jobs-infeasible.png", full_page=True)
 
+    # the search box: one or two letters are not sent (no index answers them: the API says
+    # 422), a hint shows and the list stays as it is; a job's id finds that job
+    page.select_option("#verdict-filter", "")
+    page.wait_for_selector(f"tr[data-job='{good_id}']")
+    page.fill("#job-search", "ga")
+    page.wait_for_selector("#search-hint")
+    page.wait_for_timeout(700)  # past the search box's 300 ms pause
+    assert page.locator("#jobs-table tbody tr").count() == 3
+    assert page.inner_text("#jobs-count") == "1–3 of 3"
+    page.fill("#job-search", f"ga {bad_id}")
+    page.wait_for_selector("#search-hint", state="hidden")
+    page.wait_for_selector(f"tr[data-job='{good_id}']", state="detached")
+    assert page.locator("#jobs-table tbody tr").count() == 1
+    assert page.inner_text("#jobs-count") == "1–1 of 1"
+    page.fill("#job-search", "")
+    page.wait_for_selector(f"tr[data-job='{good_id}']")
+
     page.goto(f"{stack.url}/#/job/{bad_id}")
     # the card is drawn from the job, then again once its result (task, gap) is loaded: wait
     # for that last drawing before reading its colours

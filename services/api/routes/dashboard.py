@@ -19,7 +19,7 @@ from services.api.dashboard_schemas import (
     StudyFit,
 )
 from services.api.deps import MAX_OFFSET, Context, CurrentKey
-from services.api.errors import invalid, not_found
+from services.api.errors import VALIDATION_ERROR_SCHEMA, invalid, not_found
 from services.api.lookups import Filters, sync_labels
 from services.api.robot_validation import summarize_robot
 from services.api.schemas import DEFAULT_LIMIT, MAX_LIMIT, ErrorOut
@@ -38,6 +38,13 @@ OPTIMIZERS = ("ga", "hka", "moead", "nsga2")
     "/dashboard/jobs",
     response_model=JobRowPage,
     summary="The jobs page: your jobs filtered, sorted and searched",
+    responses={
+        422: {
+            "description": "A bad query: e.g. a search `q` of only words shorter than 3 "
+            "characters (`query.q`), a cursor of another order (`query.cursor`).",
+            "content": {"application/json": {"schema": VALIDATION_ERROR_SCHEMA}},
+        },
+    },
 )
 def dashboard_jobs(
     key: CurrentKey,
@@ -63,7 +70,9 @@ def dashboard_jobs(
     filtered, sorted and paged in the database (indexed), so a page costs about the same at
     10^5 jobs as at 10. Every order is the column, then newest first
     (NULLs last); pass `cursor` (the previous page's `next_cursor`) to page by keyset at any
-    depth, or `offset` (which costs more the deeper it goes)."""
+    depth, or `offset` (which costs more the deeper it goes). `total` is counted up to 1 001
+    (`total_exact` says whether it stopped there). A search `q` of only words shorter than 3
+    characters is a 422 (`query.q`): no index answers it."""
     sync_labels(ctx, key.id)
     with ctx.read() as session:
         try:
@@ -76,6 +85,7 @@ def dashboard_jobs(
     return JobRowPage(
         items=[JobRowOut.from_row(r) for r in page.items],
         total=page.total,
+        total_exact=page.total_exact,
         limit=page.limit,
         offset=page.offset,
         next_cursor=page.next_cursor,

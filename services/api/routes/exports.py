@@ -140,7 +140,8 @@ def job_rows(ctx: ApiContext, key_id: str, filters: dq.JobFilter) -> Iterator[tu
         **_FILE,
         422: {
             "description": "A bad query, or a filter naming no sweep of yours (`query.sweep_id`) "
-            "or no robot (`query.robot`).",
+            "or no robot (`query.robot`), or a search of only words shorter than 3 characters "
+            "(`query.q`).",
             "content": {"application/json": {"schema": VALIDATION_ERROR_SCHEMA}},
         },
     },

@@ -152,9 +152,34 @@ def test_pages_and_assets_are_served_locally(env: dict[str, Any]) -> None:
 def test_total_is_counted_up_to_the_cap(
     env: dict[str, Any], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(dq, "COUNT_CAP", 2)
+    page = env["client"].get(f"{API}/dashboard/jobs?limit=1", headers=env["alice"]).json()
+    assert page["total"] == 5 and page["total_exact"] is True
+    monkeypatch.setattr(dq, "PAGE_COUNT_CAP", 2)
     page = env["client"].get(f"{API}/dashboard/jobs?limit=1", headers=env["alice"]).json()
     assert page["total"] == 3 and len(page["items"]) == 1  # 3 = "more than 2"
+    assert page["total_exact"] is False
+
+
+def test_a_search_of_short_words_only_is_refused(env: dict[str, Any]) -> None:
+    """No trigram answers a word of one or two characters: alone it is a 422 naming ``q`` (it
+    would read every label of the key); beside a longer word it is checked on its matches; an
+    id finds its job (by the primary key)."""
+    client, alice = env["client"], env["alice"]
+    for q in ("ab", "a", "zq 7", "  s   e "):
+        for path in ("/dashboard/jobs", "/export/jobs"):
+            r = client.get(f"{API}{path}", params={"q": q}, headers=alice)
+            assert r.status_code == 422, (path, q, r.text)
+            (err,) = r.json()["detail"]
+            assert err["loc"] == ["query", "q"] and "3 characters" in err["msg"], err
+    for q, total in (("seed=1 zq", 0), ("seed=1 s", 2), ("", 5), ("   ", 5)):
+        r = client.get(f"{API}/dashboard/jobs", params={"q": q}, headers=alice)
+        assert r.status_code == 200 and r.json()["total"] == total, (q, r.text)
+    job = env["job"]
+    for q in (job, job[:13].upper(), f"{job} nsga2 s"):
+        page = client.get(f"{API}/dashboard/jobs", params={"q": q}, headers=alice).json()
+        assert [i["id"] for i in page["items"]] == [job] and page["total_exact"], q
+    bob = client.get(f"{API}/dashboard/jobs", params={"q": job}, headers=env["bob"]).json()
+    assert bob["total"] == 0
 
 
 def test_job_tags_are_listed_and_filter_the_jobs(env: dict[str, Any]) -> None:

@@ -56,6 +56,19 @@ def _fill(session: Session, key_id: str, n: int = N, start: int = 0) -> list[str
     return ids
 
 
+def _fill_sweep(session: Session, key_id: str, n: int = 5) -> tuple[str, list[str]]:
+    """A sweep of ``n`` jobs of the key (seeds 0..n-1); its id and its jobs' ids, labels
+    written."""
+    base = {"problem": {"kind": KINDS[0]}, "optimizer": {"kind": "nsga2"}, "tags": ["demo"]}
+    sweep = repo.create_sweep(session, owner_key_id=key_id, base_spec=base, axes={})
+    ids = repo.create_jobs(
+        session, owner_key_id=key_id, overrides=[{"seed": i} for i in range(n)],
+        total_generations=[10] * n, sweep_id=sweep.id,
+    )  # fmt: skip
+    dq.sync_labels(session, key_id, study_defaults)
+    return sweep.id, ids
+
+
 def _texts(session: Session, key_id: str) -> dict[str, str]:
     rows = session.execute(
         text("SELECT job_id, search FROM job_labels WHERE owner_key_id = :k"), {"k": key_id}

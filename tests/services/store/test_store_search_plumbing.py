@@ -1,7 +1,8 @@
 """The jobs page's search index itself (issue 23, item 3; what it finds:
 ``test_store_search_index``): the FTS table follows every write of the labels (triggers:
 insert, update, deletes cascaded from jobs and keys); the query plans read the index, not the
-key's labels, on both stores; a store without the index (no pg_trgm, no FTS5) still searches,
+key's labels, on both stores — and a word shaped like an id the primary key and the sweep
+index, not the trigram index; a store without the index (no pg_trgm, no FTS5) still searches,
 by LIKE, with the same results."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from search_jobs import KINDS, _fill, _ids, _texts
+from search_jobs import KINDS, _fill, _fill_sweep, _ids, _texts
 from sqlalchemy import Engine, event, text, update
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
@@ -132,6 +133,25 @@ def test_sqlite_search_and_first_page_read_indexes(tmp_path: Path) -> None:
     plans = _plans(engine, lambda s: dq.list_job_rows(s, key_id, dq.JobFilter(search="ga")))
     assert not any(SEARCH_FTS in q for q, _ in plans)
     assert any("LIKE" in q for q, _ in plans)
+
+    # a word shaped like an id: the primary key's and the sweep index's ranges drive the count
+    # and the page, then the labels and jobs by key (never the FTS table, never a scan)
+    with sessionmaker(engine).begin() as s:
+        sweep, sweep_jobs = _fill_sweep(s, key_id)
+    for f, sort in [
+        (dq.JobFilter(search=sweep_jobs[1]), "created"),
+        (dq.JobFilter(search=f"{sweep[:13]} seed", status=(JobStatus.QUEUED,)), "best"),
+        (dq.JobFilter(search=f"nsga2 {sweep}", kind="path_tracking"), "kind"),
+    ]:
+        plans = _plans(engine, lambda s, f=f, sort=sort: dq.list_job_rows(s, key_id, f, sort=sort))
+        by_id = [p for q, p in plans if "id_hits" in q]
+        assert len(by_id) >= 2 and not any(SEARCH_FTS in q for q, _ in plans), plans
+        for plan in by_id:
+            assert plan.startswith("MULTI-INDEX OR") or "| MULTI-INDEX OR |" in plan, plan
+            assert re.search(r"SEARCH by_id USING (COVERING )?INDEX sqlite_autoindex_jobs", plan)
+            assert re.search(r"SEARCH by_id USING (COVERING )?INDEX ix_jobs_sweep_id", plan)
+            assert "SEARCH job_labels USING INDEX sqlite_autoindex_job_labels" in plan, plan
+            assert not re.search(r"SCAN (by_id|job_labels|jobs)\b(?!_)", plan), plan
     engine.dispose()
 
 
@@ -184,11 +204,34 @@ def test_postgres_search_and_first_page_read_indexes(pg_migrated: Engine) -> Non
     index = re.compile(r"Index (Only )?Scan (Backward )?using ix_jobs_owner_key_id")
     assert all(index.search(p) and "Seq Scan" not in p for _, p in plans), plans
 
+    # a word shaped like an id: the primary key and the sweep index, not the trigram index
+    with factory.begin() as s:
+        sweep, sweep_jobs = _fill_sweep(s, key_id)
+        job = s.execute(text("SELECT job_id FROM job_labels WHERE name = 'job 77'")).scalar_one()
+    with engine.connect().execution_options(isolation_level="AUTOCOMMIT") as c:
+        c.execute(text("VACUUM ANALYZE"))
+    for f in (
+        dq.JobFilter(search=job),
+        dq.JobFilter(search=f"{job[:13]} seed=77"),
+        dq.JobFilter(search=f"{sweep} nsga2", status=(JobStatus.QUEUED,)),
+    ):
+        plans = _plans(engine, lambda s, f=f: dq.list_job_rows(s, key_id, f))
+        by_id = [p for q, p in plans if "id_hits" in q]
+        assert len(by_id) == 2, plans
+        for plan in by_id:
+            assert "pk_jobs" in plan and "ix_jobs_sweep_id" in plan, plan
+            assert SEARCH_TRGM_INDEX not in plan and "Seq Scan" not in plan, plan
+        with factory() as s:
+            scan = dq.list_job_rows(s, key_id, f, search_index=False)
+            page = dq.list_job_rows(s, key_id, f)
+            assert _ids(page) == _ids(scan) and page.total == scan.total >= 1, f
+
 
 def test_sqlite_without_trigram_fts_searches_by_like(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """An SQLite without FTS5 / the trigram tokenizer gets no FTS table and the same results."""
+    """An SQLite without FTS5 / the trigram tokenizer gets no FTS table and the same results
+    (an id word still by the primary key)."""
     monkeypatch.setattr(search_index, "sqlite_has_trigram_fts", lambda _c: False)
     engine = make_engine(sqlite_url(tmp_path))
     Base.metadata.create_all(engine)
@@ -201,7 +244,8 @@ def test_sqlite_without_trigram_fts_searches_by_like(
             s.execute(text(f"SELECT 1 FROM sqlite_master WHERE name = '{SEARCH_FTS}'")).all() == []
         )
         texts = _texts(s, key_id)
-        for q in ("seed=1", "calderon", "ga"):
+        job = sorted(texts)[3]  # an id word: by the primary key there too
+        for q in ("seed=1", "calderon", "ga", job, job[:13]):
             want = {j for j, t in texts.items() if q in t}
             assert set(_ids(dq.list_job_rows(s, key_id, dq.JobFilter(search=q)))) == want
     engine.dispose()

@@ -371,8 +371,16 @@ export interface JobRowOut {
 /** A page of the jobs page: rows, how many match, and the cursor of the next page. */
 export interface JobRowPage {
   items: JobRowOut[];
-  /** Jobs matching the filters (all pages), counted up to 10 001: 10 001 means more than 10 000. */
+  /**
+   * Jobs matching the filters (all pages), counted up to 1 001: when `total_exact` is false, more
+   * than 1 000 match (an exact count would cost what every match costs, more as the store grows).
+   */
   total: number;
+  /**
+   * True when `total` is the number of matching jobs; false when the count stopped at 1 001 (show
+   * "more than 1,000").
+   */
+  total_exact: boolean;
   limit: number;
   offset: number;
   /** Pass as `cursor` for the next page (same sort and order); null on the last page. */

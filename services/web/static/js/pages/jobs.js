@@ -20,6 +20,20 @@ const COLUMNS = [
   ["actions", "", null],
 ];
 
+/** The API searches a word shorter than this only next to a longer one (its trigram index
+ * answers words of 3 characters or more; a search of short words alone is a 422). */
+const MIN_WORD = 3;
+
+/**
+ * The search box's text as the API takes it: "" while no word has MIN_WORD characters yet
+ * (one or two letters typed so far: the list stays unsearched, the hint shows).
+ * @param {string} text
+ */
+function searchable(text) {
+  const words = text.trim().toLowerCase().split(/\s+/).filter(Boolean).slice(0, 8);
+  return words.some((w) => [...w].length >= MIN_WORD) ? text.trim() : "";
+}
+
 /**
  * The filters, sort and page size a #/jobs?… address asks for.
  * @param {string} hash
@@ -48,7 +62,8 @@ export async function render(main, _param, hash) {
   let timer;
   let alive = true;
 
-  const search = /** @type {HTMLInputElement} */ (h("input", { type: "search", placeholder: "search name, robot, seed=3, id…", value: st.q, size: 28 }));
+  const search = /** @type {HTMLInputElement} */ (h("input#job-search", { type: "search", placeholder: "search name, robot, seed=3, id…", value: st.q, size: 28 }));
+  const searchHint = h("span.muted#search-hint", { hidden: true }, `type ${MIN_WORD} or more characters to search`);
   const kind = /** @type {HTMLSelectElement} */ (h("select", h("option", { value: "" }, "all studies"),
     options.kinds.map((k) => h("option", { value: k.value, selected: k.value === st.kind }, k.value))));
   const optimizer = /** @type {HTMLSelectElement} */ (h("select", h("option", { value: "" }, "all optimizers"),
@@ -60,11 +75,11 @@ export async function render(main, _param, hash) {
     checked: st.status.includes(s) }), " ", s));
   /** @param {HTMLElement} label a status's label: its checkbox */
   const boxOf = (label) => /** @type {HTMLInputElement} */ (label.firstChild);
-  const info = h("span.muted");
+  const info = h("span.muted#jobs-count");
   const table = h("table#jobs-table");
   const pager = h("div.pager");
 
-  const filters = () => ({ q: search.value.trim(), kind: kind.value, optimizer: optimizer.value,
+  const filters = () => ({ q: searchable(search.value), kind: kind.value, optimizer: optimizer.value,
     robot: robot.value.trim(), status: statusBoxes.map(boxOf).filter((c) => c.checked).map((c) => c.value),
     sweep_id: st.sweep_id, feasible: verdict.value });
 
@@ -72,6 +87,9 @@ export async function render(main, _param, hash) {
   for (const el of [kind, optimizer, verdict, ...statusBoxes.map(boxOf)]) el.addEventListener("change", restart);
   /** @type {number | undefined} */
   let debounce;
+  const hintSearch = () => { searchHint.hidden = !search.value.trim() || searchable(search.value) !== ""; };
+  hintSearch();
+  search.addEventListener("input", hintSearch);
   for (const el of [search, robot]) el.addEventListener("input", () => { clearTimeout(debounce); debounce = setTimeout(restart, 300); });
 
   const newJob = newJobForm(options, () => restart());
@@ -82,7 +100,7 @@ export async function render(main, _param, hash) {
         on: { click: () => download(`/export/jobs${query({ ...filters(), format: f })}`, `jobs.${f}`) } }, f.toUpperCase()))),
     newJob,
     h("div.card",
-      h("div.toolbar", search, kind, optimizer, robot, verdict, ...statusBoxes,
+      h("div.toolbar", search, searchHint, kind, optimizer, robot, verdict, ...statusBoxes,
         st.sweep_id ? h("span.tag", `sweep ${shortId(st.sweep_id)}`) : null, h("span.spacer"), info),
       h("div.scroll.full", table), pager));
 
@@ -97,7 +115,8 @@ export async function render(main, _param, hash) {
     }
     if (!alive) return;
     const start = st.page * st.limit;
-    const total = page.total > 10000 ? "more than 10,000" : page.total.toLocaleString();
+    // total_exact false: the API stopped counting (total = its cap + 1)
+    const total = page.total_exact ? page.total.toLocaleString() : `more than ${(page.total - 1).toLocaleString()}`;
     info.textContent = page.total ? `${start + 1}–${start + page.items.length} of ${total}` : "no jobs";
     drawTable(page.items);
     drawPager(page, start);
