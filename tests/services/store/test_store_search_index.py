@@ -56,19 +56,26 @@ def filled(engine: Engine) -> tuple[sessionmaker[Session], str]:
     return factory, key_id
 
 
+def _same_as_the_scan(s: Session, key_id: str, texts: dict[str, str], q: str) -> dq.JobRowPage:
+    """The indexed search ``q``'s first page: its rows those whose text holds every word, the
+    same rows, order and total as the LIKE scan's."""
+    words = q.lower().split()
+    want = {j for j, t in texts.items() if all(w in t for w in words)}
+    f = dq.JobFilter(search=q)
+    page = dq.list_job_rows(s, key_id, f, limit=100)
+    scan = dq.list_job_rows(s, key_id, f, limit=100, search_index=False)
+    assert set(_ids(page)) == want, q
+    assert _ids(page) == _ids(scan) and page.total == scan.total == len(want), q
+    return page
+
+
 def test_search_finds_what_the_like_scan_finds(filled: tuple[sessionmaker[Session], str]) -> None:
     factory, key_id = filled
     with factory() as s:
         texts = _texts(s, key_id)
         assert len(texts) == N
         for q in QUERIES:
-            words = q.lower().split()
-            want = {j for j, t in texts.items() if all(w in t for w in words)}
-            f = dq.JobFilter(search=q)
-            page = dq.list_job_rows(s, key_id, f, limit=100)
-            scan = dq.list_job_rows(s, key_id, f, limit=100, search_index=False)
-            assert set(_ids(page)) == want, q
-            assert _ids(page) == _ids(scan) and page.total == scan.total == len(want), q
+            _same_as_the_scan(s, key_id, texts, q)
         assert dq.list_job_rows(s, key_id, dq.JobFilter(search="calderon")).total > 0
 
 
@@ -155,14 +162,7 @@ def test_an_id_word_finds_what_the_like_scan_finds(
     with factory() as s:
         texts = _texts(s, key_id)
         for q in _id_queries(ids):
-            words = q.lower().split()
-            want = {j for j, t in texts.items() if all(w in t for w in words)}
-            f = dq.JobFilter(search=q)
-            page = dq.list_job_rows(s, key_id, f, limit=100)
-            scan = dq.list_job_rows(s, key_id, f, limit=100, search_index=False)
-            assert set(_ids(page)) == want, q
-            assert _ids(page) == _ids(scan) and page.total == scan.total == len(want), q
-            assert page.total_exact, q
+            assert _same_as_the_scan(s, key_id, texts, q).total_exact, q
         assert len(_ids(dq.list_job_rows(s, key_id, dq.JobFilter(search=ids["sweep"])))) == 5
         assert _ids(dq.list_job_rows(s, key_id, dq.JobFilter(search=ids["job"]))) == [ids["job"]]
 
