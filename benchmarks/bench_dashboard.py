@@ -22,7 +22,7 @@ Then, in the store (``dashboard_queries.list_job_rows``, no HTTP), each search b
 either way) against the same search by LIKE scan — the
 read before revision 0009; on PostgreSQL the same statements planned with bitmap scans off,
 the only way a GIN index is read — interleaved sample by sample, as a ratio; and the two
-counts: the jobs page's, capped at ``PAGE_COUNT_CAP + 1``, and ``GET /jobs``'s exact
+counts: the jobs page's, capped at ``COUNT_CAP + 1``, and ``GET /jobs``'s exact
 ``count(*)``.
 
     python benchmarks/bench_dashboard.py [--sizes 1000,10000,100000] [--repeat 30]
@@ -182,7 +182,7 @@ def store_reads(
     def count(capped: bool) -> Callable[[], Any]:
         matches = select(literal(1)).select_from(JOBS).where(JOBS.c.owner_key_id == key_id)
         if capped:
-            matches = matches.limit(dq.PAGE_COUNT_CAP + 1)
+            matches = matches.limit(dq.COUNT_CAP + 1)
         stmt = select(func.count()).select_from(matches.subquery())
 
         def run() -> Any:
@@ -192,7 +192,7 @@ def store_reads(
         return run
 
     ms_capped, ms_exact, _ = paired(count(True), count(False), repeat)
-    rows.append((f"count: page's (≤ {dq.PAGE_COUNT_CAP + 1:,}) / GET /jobs's exact (ms)", n,
+    rows.append((f"count: page's (≤ {dq.COUNT_CAP + 1:,}) / GET /jobs's exact (ms)", n,
                  f"{ms_capped:.2f} / {ms_exact:.2f}"))  # fmt: skip
     print(f"  counts {n:>7} capped {ms_capped:.2f} ms  exact {ms_exact:.2f} ms", file=sys.stderr)
     if reference is not ctx.session_factory:

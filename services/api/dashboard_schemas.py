@@ -15,8 +15,9 @@ from services.api.verdict_schemas import (
     ViolationOut,
     violations_out,
 )
-from services.store.dashboard_queries import PAGE_COUNT_CAP, JobRow
+from services.store.dashboard_queries import JobRow
 from services.store.records import BaselineRecord
+from services.store.sql import COUNT_CAP
 from services.store.states import JobStatus
 
 
@@ -123,7 +124,7 @@ class JobRowOut(BaseModel):
 
 
 #: The jobs page's count cap, as the docs write numbers (1 000).
-_CAP, _CAP_1 = (f"{n:,}".replace(",", " ") for n in (PAGE_COUNT_CAP, PAGE_COUNT_CAP + 1))
+_CAP, _CAP_1 = (f"{n:,}".replace(",", " ") for n in (COUNT_CAP, COUNT_CAP + 1))
 
 
 class JobRowPage(BaseModel):
@@ -137,7 +138,7 @@ class JobRowPage(BaseModel):
     )
     total_exact: bool = Field(
         description="True when `total` is the number of matching jobs; false when the count "
-        f'stopped at {_CAP_1} (show "more than {PAGE_COUNT_CAP:,}").'
+        f'stopped at {_CAP_1} (show "more than {COUNT_CAP:,}").'
     )
     limit: int
     offset: int

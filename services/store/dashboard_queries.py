@@ -42,6 +42,7 @@ from services.store.job_search_paging import (
 )
 from services.store.records import JobRecord
 from services.store.search_index import MIN_INDEXED_WORD
+from services.store.sql import COUNT_CAP
 from services.store.states import JobStatus
 from services.store.tables import JOB_LABELS, JOBS, SWEEPS
 
@@ -49,12 +50,6 @@ from services.store.tables import JOB_LABELS, JOBS, SWEEPS
 #: transaction that committed late); PostgreSQL commits a job within ms of its created_at.
 LABEL_SLACK = timedelta(seconds=60)
 
-#: The jobs page counts a listing's matches up to this many, then says "more than"
-#: (``JobRowPage.total_exact`` False, ``total`` = ``PAGE_COUNT_CAP + 1``). Lower than the API
-#: list's ``COUNT_CAP``: a search's count costs what its matches cost, so a frequent word stops
-#: costing more as the store grows once 1 001 are found; it is also where a search stops
-#: sorting its matches and walks the page's order instead.
-PAGE_COUNT_CAP = 1_000
 
 SortKey = Literal["created", "finished", "status", "kind", "robot", "optimizer", "progress", "best"]
 SORT_KEYS: tuple[str, ...] = (
@@ -208,7 +203,7 @@ class JobRow:
 @dataclass(frozen=True)
 class JobRowPage:
     """A page of jobs: the rows, how many match (``total_exact`` False: at least ``total``,
-    the count stopped at ``PAGE_COUNT_CAP + 1``; or not counted, -1), and the keyset cursor of
+    the count stopped at ``COUNT_CAP + 1``; or not counted, -1), and the keyset cursor of
     the next page (None on the last page)."""
 
     items: tuple[JobRow, ...]
@@ -277,7 +272,7 @@ def list_job_rows(
     ``(owner, created_at)`` indexes. Every order is ``(sort column, created_at, id)``, NULLs
     last; ``cursor`` (a page's ``next_cursor``, same sort and order) continues after the last
     row of the previous page in O(limit) whatever the depth; ``offset`` pages by counting
-    (O(offset)). ``total`` counts at most ``PAGE_COUNT_CAP + 1`` matches (``total_exact``
+    (O(offset)). ``total`` counts at most ``COUNT_CAP + 1`` matches (``total_exact``
     False when it stopped there; ``count`` False: not at all, -1; the export streams pages
     without it). A search reads its index and a word shaped like an id the primary key (see
     "word search by index" in ``job_search_paging``); ``search_index`` False matches every
@@ -298,11 +293,11 @@ def list_job_rows(
         by_id = bool(_id_words(words))
         n = -1
         if count or not by_id:
-            n = _count(session, *driven(mixed), PAGE_COUNT_CAP)
+            n = _count(session, *driven(mixed), COUNT_CAP)
             total = n if count else -1
         # an id's rows are few (a sweep's at most): always sorted; a word in more jobs than
         # the cap: walk the page's order (LIKE), below
-        if by_id or n <= PAGE_COUNT_CAP:
+        if by_id or n <= COUNT_CAP:
             source, where = driven(mixed or sort in _JOB_SORTS)
             stmt = select(JOB_LABELS.c.job_id.label("id")).select_from(source).where(*where)
             keys_first = True
@@ -316,7 +311,7 @@ def list_job_rows(
         stmt = select(JOBS, *labels).select_from(joined).where(*conditions)
         if count and total < 0:
             source = joined if mixed else JOB_LABELS if by_labels else JOBS
-            total = _count(session, source, conditions, PAGE_COUNT_CAP)
+            total = _count(session, source, conditions, COUNT_CAP)
     order = _Order(sort, descending, by_labels)
     if cursor is not None or offset == 0:  # one more row than asked: is there a next page?
         rows = _keyset_rows(session, stmt, order, limit + 1, cursor)
@@ -343,7 +338,7 @@ def list_job_rows(
     if more:
         last = rows[-1]
         next_cursor = encode_cursor(sort, _row_value(last, sort), last["created_at"], last["id"])
-    exact = 0 <= total <= PAGE_COUNT_CAP
+    exact = 0 <= total <= COUNT_CAP
     return JobRowPage(items, total, limit, offset, next_cursor, total_exact=exact)
 
 
@@ -381,7 +376,7 @@ def _job_record(row: Any) -> JobRecord:
 
 __all__ = [
     "LABEL_SLACK",
-    "PAGE_COUNT_CAP",
+    "COUNT_CAP",
     "SORT_KEYS",
     "JobFilter",
     "JobRow",

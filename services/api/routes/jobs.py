@@ -50,6 +50,7 @@ from services.store import repository as repo
 from services.store.idempotency import request_fingerprint
 from services.store.records import JobRecord
 from services.store.specs import json_size
+from services.store.sql import COUNT_CAP
 from services.store.states import JobStatus
 
 router = APIRouter(tags=["jobs"])
@@ -161,6 +162,7 @@ def list_jobs(
     return JobPage(
         items=[JobOut.from_record(j, labels[j.id]) for j in jobs.items],
         total=jobs.total,
+        total_exact=jobs.total <= COUNT_CAP,
         limit=jobs.limit,
         offset=jobs.offset,
     )

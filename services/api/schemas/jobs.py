@@ -135,8 +135,12 @@ class JobPage(Page[JobOut]):
 
     total: int = Field(
         description=f"Jobs matching the filters (all pages), counted up to {COUNT_CAP + 1}: "
-        f"{COUNT_CAP + 1} means more than {COUNT_CAP} (an exact count would cost more than "
-        "the page as the store grows)."
+        f"when `total_exact` is false, more than {COUNT_CAP} match (an exact count would cost "
+        "more than the page as the store grows)."
+    )
+    total_exact: bool = Field(
+        description="True when `total` is the number of matching jobs; false when the count "
+        f"stopped at {COUNT_CAP + 1} (page on while `items` is full)."
     )
 
 

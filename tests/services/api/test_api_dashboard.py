@@ -154,7 +154,7 @@ def test_total_is_counted_up_to_the_cap(
 ) -> None:
     page = env["client"].get(f"{API}/dashboard/jobs?limit=1", headers=env["alice"]).json()
     assert page["total"] == 5 and page["total_exact"] is True
-    monkeypatch.setattr(dq, "PAGE_COUNT_CAP", 2)
+    monkeypatch.setattr(dq, "COUNT_CAP", 2)
     page = env["client"].get(f"{API}/dashboard/jobs?limit=1", headers=env["alice"]).json()
     assert page["total"] == 3 and len(page["items"]) == 1  # 3 = "more than 2"
     assert page["total_exact"] is False

@@ -108,9 +108,9 @@ def test_search_with_filters_orders_and_pages(
 def test_a_word_in_more_jobs_than_counted_is_read_the_old_way(
     filled: tuple[sessionmaker[Session], str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """More matches than PAGE_COUNT_CAP: the total says "more than", the page walks the order."""
+    """More matches than COUNT_CAP: the total says "more than", the page walks the order."""
     factory, key_id = filled
-    monkeypatch.setattr(dq, "PAGE_COUNT_CAP", 5)
+    monkeypatch.setattr(dq, "COUNT_CAP", 5)
     with factory() as s:
         for q in ("seed", "nsga2", "seed=1", "seed=12", "seed=12 ga"):
             scan = dq.list_job_rows(s, key_id, dq.JobFilter(search=q), search_index=False)
@@ -204,7 +204,7 @@ def test_an_id_word_is_counted_up_to_the_cap_and_still_sorted(
     """A sweep's id matches more jobs than the count's cap: "more than", and the page the
     same rows in the same order as the LIKE scan."""
     factory, key_id, ids = swept
-    monkeypatch.setattr(dq, "PAGE_COUNT_CAP", 3)
+    monkeypatch.setattr(dq, "COUNT_CAP", 3)
     with factory() as s:
         f = dq.JobFilter(search=ids["sweep"])
         page = dq.list_job_rows(s, key_id, f, limit=2)
