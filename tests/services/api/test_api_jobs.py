@@ -356,6 +356,7 @@ def test_another_key_gets_404_everywhere(
     assert client.get(f"{API}/jobs", headers=bob).json() == {
         "items": [],
         "total": 0,
+        "total_exact": True,
         "limit": 50,
         "offset": 0,
     }
@@ -385,6 +386,23 @@ def test_list_jobs_filters_and_pagination(
     assert client.get(f"{API}/jobs?status=bogus", headers=alice).status_code == 422
     assert client.get(f"{API}/jobs?sweep_id=none", headers=alice).json()["total"] == 0
     assert client.get(f"{API}/jobs?limit=1001", headers=alice).status_code == 422
+
+
+def test_list_jobs_says_when_its_count_stopped_at_the_cap(
+    client: TestClient, alice: dict[str, str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``total`` is counted up to ``COUNT_CAP + 1``; ``total_exact`` says which it is."""
+    from services.api.routes import jobs as job_routes
+    from services.store import repository
+
+    for i in range(4):
+        submit(client, alice, {"problem": {"kind": KINDS[0]}, "seed": 100 + i})
+    exact = client.get(f"{API}/jobs", headers=alice).json()
+    assert exact["total_exact"] is True and exact["total"] >= 4
+    for module in (job_routes, repository):
+        monkeypatch.setattr(module, "COUNT_CAP", 2)
+    capped = client.get(f"{API}/jobs?limit=1", headers=alice).json()
+    assert capped["total"] == 3 and capped["total_exact"] is False
 
 
 def test_keys_are_isolated_by_listing(client: TestClient, ctx: ApiContext) -> None:
