@@ -50,7 +50,6 @@ from services.store.tables import JOB_LABELS, JOBS, SWEEPS
 #: transaction that committed late); PostgreSQL commits a job within ms of its created_at.
 LABEL_SLACK = timedelta(seconds=60)
 
-
 SortKey = Literal["created", "finished", "status", "kind", "robot", "optimizer", "progress", "best"]
 SORT_KEYS: tuple[str, ...] = (
     "created", "finished", "status", "kind", "robot", "optimizer", "progress", "best",
@@ -375,8 +374,8 @@ def _job_record(row: Any) -> JobRecord:
 
 
 __all__ = [
-    "LABEL_SLACK",
     "COUNT_CAP",
+    "LABEL_SLACK",
     "SORT_KEYS",
     "JobFilter",
     "JobRow",

@@ -39,11 +39,14 @@ def id_prefix_range(prefix: str) -> tuple[str, str] | None:
 
 
 def id_prefix_condition(column: ColumnElement[str], prefix: str) -> ColumnElement[bool]:
-    """``column`` starts with ``prefix`` (case-insensitive), as an index range."""
+    """``column`` starts with ``prefix`` (case-insensitive), as an index range (a whole id:
+    equal to it)."""
     bounds = id_prefix_range(prefix)
     if bounds is None:
         return false()
     low, high = bounds
+    if len(prefix) == len(UUID_SHAPE):
+        return column == low
     return and_(column >= low, column <= high, column.startswith(low[: len(prefix)]))
 
 

@@ -20,7 +20,6 @@ from sqlalchemy import (
     FromClause,
     Select,
     column,
-    func,
     literal,
     literal_column,
     or_,
@@ -33,8 +32,9 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.compiler import SQLCompiler
 from sqlalchemy.sql.selectable import Join
 
-from services.store.id_prefix import UUID_SHAPE, id_prefix_condition, id_prefix_range
+from services.store.id_prefix import id_prefix_condition, id_prefix_range
 from services.store.search_index import MIN_INDEXED_WORD, SEARCH_FTS
+from services.store.sql import capped_count
 from services.store.states import JobStatus
 from services.store.tables import JOB_LABELS, JOBS
 
@@ -67,7 +67,7 @@ def unindexed_search(search: str | None) -> bool:
 # being lower-cased); shorter words — which no trigram can answer — and stores without the
 # table (SQLite without FTS5 / trigram) keep LIKE. The matches drive the query (``_CrossJoin``:
 # SQLite's planner, without statistics, would otherwise walk the key's whole index and probe
-# each row): counted up to the page's count cap + 1, then sorted by their keys alone and the
+# each row): counted up to COUNT_CAP + 1, then sorted by their keys alone and the
 # page's rows read. A word in more of the key's jobs than the cap is frequent enough that
 # walking the page's order and checking each row by LIKE finds a page sooner than sorting every
 # match, so that page is read the old way.
@@ -146,13 +146,6 @@ def _id_words(words: list[str]) -> list[str]:
     return [w for w in words if MIN_ID_WORD <= len(w) and id_prefix_range(w) is not None]
 
 
-def _id_condition(column: ColumnElement[str], word: str) -> ColumnElement[bool]:
-    """``column`` starts with the id word ``word``: equal to a whole id, else a range."""
-    if len(word) == len(UUID_SHAPE):
-        return column == word
-    return id_prefix_condition(column, word)
-
-
 #: The jobs an id word finds (an alias: the query may join the jobs table again); made once,
 #: its columns' proxies cost more to build than the query to run.
 _BY_ID = JOBS.alias("by_id")
@@ -164,7 +157,7 @@ def _id_driven(word: str, mixed: bool) -> FromClause:
     jobs again, when ``mixed``): O(1) at any store size, O(sweep) for a sweep's id."""
     found = _BY_ID
     hits = select(found.c.id).where(
-        or_(_id_condition(found.c.id, word), _id_condition(found.c.sweep_id, word))
+        or_(id_prefix_condition(found.c.id, word), id_prefix_condition(found.c.sweep_id, word))
     )
     ids = hits.subquery("id_hits")
     source: FromClause = _CrossJoin(ids, JOB_LABELS, JOB_LABELS.c.job_id == ids.c.id)
@@ -177,9 +170,7 @@ def _count(
     session: Session, source: FromClause, where: list[ColumnElement[bool]], cap: int
 ) -> int:
     """The rows of ``source`` matching ``where``, counted up to ``cap + 1``."""
-    matches = select(literal(1)).select_from(source).where(*where)
-    capped = matches.limit(cap + 1).subquery()
-    return int(session.execute(select(func.count()).select_from(capped)).scalar_one())
+    return capped_count(session, select(literal(1)).select_from(source).where(*where), cap)
 
 
 def _rows_by_id(session: Session, ids: list[str], labels: list[Any]) -> list[Any]:

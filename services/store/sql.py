@@ -86,10 +86,16 @@ def fetch_page(
     ``count_cap``, counted up to ``count_cap + 1`` (that value then means "more than
     ``count_cap``"), so the count costs no more as the table grows."""
     check_page(limit, offset)
-    counted = stmt if count_cap is None else stmt.limit(count_cap + 1)
-    total = session.execute(select(func.count()).select_from(counted.subquery())).scalar_one()
+    total = capped_count(session, stmt, count_cap)
     items = fetch_all(session, cls, stmt.order_by(*order_by).limit(limit).offset(offset))
     return Page(items=items, total=int(total), limit=limit, offset=offset)
+
+
+def capped_count(session: Session, stmt: Select[Any], cap: int | None) -> int:
+    """The rows of ``stmt``, counted up to ``cap + 1`` (that value then means "more than
+    ``cap``"; None: exactly): at most ``cap + 1`` index entries read at any table size."""
+    counted = stmt if cap is None else stmt.limit(cap + 1)
+    return int(session.execute(select(func.count()).select_from(counted.subquery())).scalar_one())
 
 
 def insert_or_conflict(session: Session, table: Table, values: dict[str, Any], what: str) -> None:
@@ -146,6 +152,7 @@ def insert_many_ignoring_duplicates(
 
 __all__ = [
     "MAX_PAGE_SIZE",
+    "capped_count",
     "fetch_all",
     "fetch_one",
     "fetch_page",
